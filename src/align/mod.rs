@@ -1,0 +1,3 @@
+//! Time alignment: find the clock offset Δt between an estimate and its reference from positions alone.
+
+pub mod curvature;

@@ -1,0 +1,3 @@
+//! Message decoding: bytes of one message → a pose or a position sample.
+
+pub mod ros2_msgs;

@@ -1,0 +1,97 @@
+//! The library's error type.
+//!
+//! Every variant renders as one line that names the file, the topic (where there is one) and what the
+//! user can do about it: the CLI prints it as is and exits non-zero. No code path in the library
+//! panics on bad input; it returns one of these.
+
+use std::path::PathBuf;
+
+/// Result alias used throughout the library.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything that can go wrong while evaluating a recording.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The file could not be opened or read.
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// The file is not an MCAP recording (bad magic, or no record could be parsed).
+    #[error("{path}: not an MCAP recording ({detail}); pass a .mcap file, or a TUM file with --reference-file/--estimate-file")]
+    NotMcap { path: PathBuf, detail: String },
+
+    /// The MCAP file is damaged beyond what truncation recovery covers.
+    #[error("{path}: damaged MCAP ({detail}); try `mcap recover` on it first")]
+    CorruptMcap { path: PathBuf, detail: String },
+
+    /// A requested topic is not in the recording.
+    #[error("{path}: topic {topic} not found; topics present: {}", .available.join(", "))]
+    TopicNotFound {
+        path: PathBuf,
+        topic: String,
+        available: Vec<String>,
+    },
+
+    /// A requested topic has a message type trajdrift cannot read as a trajectory.
+    #[error("{path}: topic {topic} has type {type_name}, which trajdrift cannot read as a trajectory; supported types: {}", .supported.join(", "))]
+    UnsupportedType {
+        path: PathBuf,
+        topic: String,
+        type_name: String,
+        supported: Vec<String>,
+    },
+
+    /// A message could not be decoded.
+    #[error("{path}: topic {topic}: cannot decode message {index}: {detail}; check that the channel's schema matches its messages")]
+    Decode {
+        path: PathBuf,
+        topic: String,
+        index: u64,
+        detail: String,
+    },
+
+    /// A text trajectory file could not be parsed.
+    #[error("{path}:{line}: {detail}; expected TUM lines `t x y z qx qy qz qw`")]
+    TextFormat {
+        path: PathBuf,
+        line: usize,
+        detail: String,
+    },
+
+    /// A trajectory has too few usable samples for the requested computation.
+    #[error("{what}: only {n} usable samples (need at least {need}); check the topic, the crop (--t-start/--t-end) and the stamps")]
+    TooFewSamples { what: String, n: usize, need: usize },
+
+    /// The estimate and the reference do not overlap in time.
+    #[error("{estimate} [{est_start:.3}, {est_end:.3}] s and the reference [{ref_start:.3}, {ref_end:.3}] s do not overlap in time (after a shift of {offset:.3} s); check --stamp, --time-offset and --max-offset")]
+    NoOverlap {
+        estimate: String,
+        est_start: f64,
+        est_end: f64,
+        ref_start: f64,
+        ref_end: f64,
+        offset: f64,
+    },
+
+    /// A command-line or manifest value is invalid.
+    #[error("{0}")]
+    InvalidArgument(String),
+
+    /// Writing an output failed.
+    #[error("{path}: cannot write: {detail}")]
+    Output { path: PathBuf, detail: String },
+}
+
+impl Error {
+    /// Builds an [`Error::Io`] for `path`.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

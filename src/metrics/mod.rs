@@ -1,0 +1,1 @@
+//! Metrics: Drift Error (the paper) and, later, the standard APE/RPE.

@@ -1,0 +1,1 @@
+//! Streaming MCAP source (placeholder, being written).

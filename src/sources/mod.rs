@@ -1,0 +1,93 @@
+//! Sources: where trajectories come from.
+//!
+//! Every source (an MCAP recording, a TUM file, later ROS 1 bags and rosbag2 folders) answers the same two
+//! questions through [`Source`]: which channels it holds, and the trajectories of the topics asked for.
+//! Eval, annotate and batch never care where samples came from.
+
+pub mod mcap;
+pub mod tum;
+
+use crate::error::Result;
+use crate::trajectory::Trajectory;
+
+/// Which clock stamps a sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StampSource {
+    /// `header.stamp`: when the sensor measured (default).
+    #[default]
+    Header,
+    /// The MCAP log time: when the recorder received it.
+    Log,
+}
+
+/// What to extract, and how.
+#[derive(Debug, Clone, Default)]
+pub struct ExtractOptions {
+    /// Which stamp to use.
+    pub stamp: StampSource,
+    /// Local ENU origin for `NavSatFix` topics: (latitude °, longitude °, ellipsoidal height m).
+    /// `None`: the first valid fix of the first geodetic topic requested.
+    pub origin: Option<[f64; 3]>,
+}
+
+/// One channel of a recording, as `trajdrift topics` lists it.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct TopicInfo {
+    pub topic: String,
+    /// Schema name, e.g. `geometry_msgs/msg/PoseStamped` (empty for schemaless channels).
+    pub type_name: String,
+    pub message_encoding: String,
+    pub message_count: u64,
+    /// True when trajdrift can read this channel as a trajectory.
+    pub readable: bool,
+}
+
+/// The trajectory of one topic, with what was learned while reading it.
+#[derive(Debug, Clone)]
+pub struct ExtractedTopic {
+    pub topic: String,
+    pub type_name: String,
+    pub trajectory: Trajectory,
+    /// Messages read on the topic.
+    pub messages: u64,
+    /// Samples dropped as invalid (NO_FIX, NaN).
+    pub invalid_dropped: u64,
+    /// Samples dropped because their stamp repeated the previous one.
+    pub duplicate_stamps: u64,
+    /// The ENU origin used for a geodetic topic.
+    pub geodetic_origin: Option<[f64; 3]>,
+}
+
+/// A warning the user must see (the CLI exits with code 3 when there is one).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Warning {
+    /// Stable machine-readable code, e.g. `truncated_recording`.
+    pub code: String,
+    pub message: String,
+}
+
+/// The result of one streaming pass over a source.
+#[derive(Debug, Clone, Default)]
+pub struct Extraction {
+    /// One entry per requested topic, in request order.
+    pub topics: Vec<ExtractedTopic>,
+    pub warnings: Vec<Warning>,
+}
+
+/// Reports progress in bytes read so far.
+pub type Progress<'a> = &'a (dyn Fn(u64) + Sync);
+
+/// A recording (or text file) that trajectories can be read from.
+pub trait Source {
+    /// Size of the input in bytes (for progress bars and the report).
+    fn size_bytes(&self) -> u64;
+    /// The channels of the source.
+    fn topics(&self) -> Result<Vec<TopicInfo>>;
+    /// Reads the trajectories of `topics` in one streaming pass. Memory follows the extracted samples.
+    fn extract(
+        &self,
+        topics: &[String],
+        options: &ExtractOptions,
+        progress: Progress<'_>,
+    ) -> Result<Extraction>;
+}
