@@ -6,8 +6,10 @@
 pub mod align;
 pub mod decode;
 pub mod error;
+pub mod eval;
 pub mod metrics;
 pub mod report;
+pub mod simulate;
 pub mod sources;
 pub mod trajectory;
 

@@ -1,1 +1,6 @@
-//! Reports: the JSON report and the text table.
+//! Reports: the JSON report (machine-readable, every parameter beside the numbers), the text table, and
+//! the safe writing of output files.
+
+pub mod json;
+pub mod output;
+pub mod table;

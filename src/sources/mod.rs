@@ -59,7 +59,7 @@ pub struct ExtractedTopic {
 }
 
 /// A warning the user must see (the CLI exits with code 3 when there is one).
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Warning {
     /// Stable machine-readable code, e.g. `truncated_recording`.
     pub code: String,

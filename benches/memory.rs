@@ -1,0 +1,57 @@
+//! Memory benchmark: peak RSS of `trajdrift eval` on a large recording whose bulk is an unrelated
+//! channel (like lidar). The acceptance target: below 5 % of the file size.
+//!
+//! `cargo bench --bench memory` (size with `TRAJDRIFT_BENCH_MIB`, default 1100 MiB; the recording is
+//! written to `target/bench-data/` once and reused). Prints the file size, the child's peak RSS
+//! (getrusage of the waited child, the same figure as `/usr/bin/time -v`'s "Maximum resident set size"),
+//! the ratio, and the read throughput.
+
+use std::path::PathBuf;
+use std::process::Command;
+use std::time::Instant;
+
+use trajdrift::simulate::writer::write_mcap;
+use trajdrift::simulate::{default_route, simulate, MissionConfig};
+
+fn main() {
+    let mib: u64 = std::env::var("TRAJDRIFT_BENCH_MIB").ok().and_then(|s| s.parse().ok()).unwrap_or(1100);
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/bench-data");
+    std::fs::create_dir_all(&dir).expect("create target/bench-data");
+    let path = dir.join(format!("bulk-{mib}mib.mcap"));
+    let mission = simulate(&MissionConfig::default(), &default_route());
+    if !path.exists() {
+        let bulk = (mib as f64 * 1024.0 * 1024.0 / (mission.duration_s * 10.0)) as usize;
+        let tmp = path.with_extension("tmp");
+        let f = std::io::BufWriter::new(std::fs::File::create(&tmp).expect("create bench recording"));
+        write_mcap(f, &mission, bulk).expect("write bench recording");
+        std::fs::rename(&tmp, &path).expect("rename bench recording");
+    }
+    let size = std::fs::metadata(&path).expect("stat").len();
+    let start = Instant::now();
+    let status = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+        .args(["eval", "--quiet", "--platform", "wheeled"])
+        .arg(&path)
+        .args(["--reference", "/reference/position", "--estimate", "/estimate/odom", "--json"])
+        .arg(dir.join("bulk-report.json"))
+        .status()
+        .expect("run trajdrift eval");
+    let secs = start.elapsed().as_secs_f64();
+    // SAFETY: getrusage only writes into the struct we pass.
+    let maxrss_kib = unsafe {
+        let mut ru: libc::rusage = std::mem::zeroed();
+        libc::getrusage(libc::RUSAGE_CHILDREN, &mut ru);
+        ru.ru_maxrss as u64
+    };
+    let peak = maxrss_kib * 1024;
+    println!(
+        "memory: file {:.1} MiB, eval exit {:?}, peak RSS {:.1} MiB = {:.2} % of the file (target < 5 %), {:.2} s, {:.0} MiB/s",
+        size as f64 / 1048576.0,
+        status.code(),
+        peak as f64 / 1048576.0,
+        100.0 * peak as f64 / size as f64,
+        secs,
+        size as f64 / 1048576.0 / secs
+    );
+    assert!(status.code().is_some_and(|c| c == 0 || c == 3), "eval failed");
+    assert!((peak as f64) < 0.05 * size as f64, "peak RSS above 5 % of the file size");
+}

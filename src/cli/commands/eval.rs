@@ -1,0 +1,88 @@
+//! `trajdrift eval`: time offset and Drift Error of one or more estimates against a reference.
+
+use anyhow::{anyhow, Result};
+
+use trajdrift::align::time_offset::OffsetMethod;
+use trajdrift::eval::config::{EvalConfig, NamedInput, Platform};
+use trajdrift::eval::evaluate;
+use trajdrift::metrics::lever::LeverCorrection;
+use trajdrift::report::{output::write_output, table};
+use trajdrift::sources::StampSource;
+
+use crate::cli::args::{parse_triple, EvalArgs, LeverCorrectionArg, OffsetMethodArg, PlatformArg, StampArg};
+use crate::cli::progress::ReadProgress;
+use crate::cli::{EXIT_OK, EXIT_WARNING};
+
+/// Builds the library's request from the flags.
+pub fn config_from_args(a: &EvalArgs) -> Result<EvalConfig> {
+    let reference = match (&a.reference, &a.reference_file) {
+        (Some(t), _) => NamedInput::topic(t),
+        (None, Some(f)) => NamedInput::file(&f.to_string_lossy()),
+        (None, None) => return Err(anyhow!("give --reference TOPIC or --reference-file FILE")),
+    };
+    let estimates = a
+        .estimate
+        .iter()
+        .map(|s| NamedInput::topic(s))
+        .chain(a.estimate_file.iter().map(|s| NamedInput::file(s)))
+        .collect();
+    let mut c = EvalConfig::new(a.recording.clone(), reference, estimates);
+    c.stamp = match a.stamp {
+        StampArg::Header => StampSource::Header,
+        StampArg::Log => StampSource::Log,
+    };
+    c.origin = a.origin.as_deref().map(|s| parse_triple("--origin", s)).transpose().map_err(|e| anyhow!(e))?;
+    c.platform = match a.platform {
+        PlatformArg::Legged => Platform::Legged,
+        PlatformArg::Wheeled => Platform::Wheeled,
+    };
+    c.eps_min_m = a.eps_min;
+    c.curvature_eps_m = a.curvature_eps;
+    c.path_eps_m = a.path_eps;
+    c.theta_max_rad = a.theta_max;
+    c.dt_max_s = a.dt_max;
+    c.windows_m = a.window.clone();
+    c.overlap = a.overlap;
+    c.lever_correction = match a.lever_correction {
+        LeverCorrectionArg::Paper => LeverCorrection::Paper,
+        LeverCorrectionArg::None => LeverCorrection::None,
+    };
+    c.lever_arm_m = a.lever_arm;
+    c.offset_method = match a.offset_method {
+        OffsetMethodArg::Curvature => OffsetMethod::Curvature,
+        OffsetMethodArg::Speed => OffsetMethod::Speed,
+    };
+    c.max_offset_s = a.max_offset;
+    c.grid_s = a.grid;
+    c.time_offset_s = a.time_offset;
+    c.t_start = a.t_start;
+    c.t_end = a.t_end;
+    Ok(c)
+}
+
+/// Runs the command; returns the exit code.
+pub fn run(a: EvalArgs) -> Result<u8> {
+    let config = config_from_args(&a)?;
+    let total = config
+        .recording
+        .as_ref()
+        .and_then(|p| std::fs::metadata(p).ok())
+        .map_or(0, |m| m.len());
+    let progress = ReadProgress::new(total, a.quiet);
+    let report = evaluate(&config, &|b| progress.update(b));
+    progress.finish();
+    let report = report?;
+    let json_to_stdout = a.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
+    if let Some(path) = &a.json {
+        let mut bytes = serde_json::to_vec_pretty(&report)?;
+        bytes.push(b'\n');
+        write_output(path, &bytes)?;
+    }
+    if !a.quiet && !json_to_stdout {
+        print!("{}", table::render(&report));
+    }
+    for w in &report.warnings {
+        eprintln!("warning [{}]: {}", w.code, w.message);
+    }
+    Ok(if report.warnings.is_empty() { EXIT_OK } else { EXIT_WARNING })
+}

@@ -1,0 +1,5 @@
+//! One handler per command: turn arguments into a library call, print the result.
+
+pub mod eval;
+pub mod simulate;
+pub mod topics;

@@ -1,0 +1,50 @@
+//! `trajdrift simulate`: write a simulated mission with known truth (the project's own fixtures and the
+//! memory benchmark's large recordings come from here).
+
+use anyhow::{anyhow, Context, Result};
+
+use trajdrift::report::output::write_output;
+use trajdrift::simulate::writer::{truth_json, write_mcap};
+use trajdrift::simulate::{default_route, simulate, MissionConfig};
+
+use crate::cli::args::{parse_triple, SimulateArgs};
+use crate::cli::EXIT_OK;
+
+/// Runs the command; returns the exit code.
+pub fn run(a: SimulateArgs) -> Result<u8> {
+    if a.out.exists() && !a.force {
+        return Err(anyhow!("{}: exists; pass --force to replace it", a.out.display()));
+    }
+    let config = MissionConfig {
+        seed: a.seed,
+        time_offset_s: a.time_offset,
+        scale_error: a.scale_error,
+        est_lever_m: parse_triple("--lever", &a.lever).map_err(|e| anyhow!(e))?,
+        ..MissionConfig::default()
+    };
+    let route: Vec<_> = std::iter::repeat_n(default_route(), a.laps.max(1)).flatten().collect();
+    let mission = simulate(&config, &route);
+    let bulk_messages = (mission.duration_s * 10.0).max(1.0);
+    let bulk_bytes = (a.bulk_mib as f64 * 1024.0 * 1024.0 / bulk_messages) as usize;
+    let tmp = a.out.with_extension(format!("mcap.{}.tmp", std::process::id()));
+    let file = std::fs::File::create(&tmp).with_context(|| format!("{}: cannot create", tmp.display()))?;
+    let written = write_mcap(std::io::BufWriter::new(file), &mission, bulk_bytes);
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e.into());
+    }
+    std::fs::rename(&tmp, &a.out).with_context(|| format!("{}: cannot write", a.out.display()))?;
+    if let Some(path) = &a.truth {
+        let mut bytes = serde_json::to_vec_pretty(&truth_json(&mission))?;
+        bytes.push(b'\n');
+        write_output(path, &bytes)?;
+    }
+    eprintln!(
+        "wrote {} ({:.0} s, {} reference and {} estimate samples)",
+        a.out.display(),
+        mission.duration_s,
+        mission.reference.len(),
+        mission.estimate.len()
+    );
+    Ok(EXIT_OK)
+}

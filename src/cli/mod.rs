@@ -1,0 +1,31 @@
+//! The command-line edge: argument definitions, one handler per command, progress display and exit
+//! codes. Results go to stdout, diagnostics to stderr.
+
+pub mod args;
+pub mod commands;
+pub mod progress;
+
+use std::process::ExitCode;
+
+/// Everything went fine.
+pub const EXIT_OK: u8 = 0;
+/// The command failed (bad input, I/O error).
+pub const EXIT_FAILURE: u8 = 1;
+/// The command finished, but with a warning the user must see (weak offset, truncated recording).
+pub const EXIT_WARNING: u8 = 3;
+
+/// Dispatches a parsed command line and maps the outcome to an exit code.
+pub fn run(cli: args::Cli) -> ExitCode {
+    let result = match cli.command {
+        args::Command::Eval(a) => commands::eval::run(a),
+        args::Command::Topics(a) => commands::topics::run(a),
+        args::Command::Simulate(a) => commands::simulate::run(a),
+    };
+    match result {
+        Ok(code) => ExitCode::from(code),
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(EXIT_FAILURE)
+        }
+    }
+}

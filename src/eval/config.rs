@@ -1,0 +1,274 @@
+//! What an evaluation is asked to do: inputs and parameters, with the paper's defaults and the rules
+//! that turn user flags into the numbers the methods use.
+
+use std::path::PathBuf;
+
+use crate::align::curvature::CurvatureParams;
+use crate::align::time_offset::{OffsetMethod, OffsetParams};
+use crate::error::{Error, Result};
+use crate::metrics::drift_error::DriftParams;
+use crate::metrics::lever::LeverCorrection;
+use crate::sources::StampSource;
+
+/// The kind of robot: it sets the paper's default ε_min (about 3σ of the reference noise it expects).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Platform {
+    /// Legged robots: ε_min 0.1 m.
+    #[default]
+    Legged,
+    /// Wheeled robots: ε_min 0.3 m.
+    Wheeled,
+}
+
+impl Platform {
+    /// The paper's ε_min for this platform, metres.
+    pub fn eps_min_m(self) -> f64 {
+        match self {
+            Platform::Legged => 0.1,
+            Platform::Wheeled => 0.3,
+        }
+    }
+
+    /// Name as written in reports.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Platform::Legged => "legged",
+            Platform::Wheeled => "wheeled",
+        }
+    }
+}
+
+/// Where one trajectory comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TrajectoryInput {
+    /// A topic of the recording.
+    Topic(String),
+    /// A TUM text file.
+    TumFile(PathBuf),
+}
+
+/// A named trajectory input.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedInput {
+    pub name: String,
+    pub input: TrajectoryInput,
+}
+
+impl NamedInput {
+    /// Parses `[NAME=]TOPIC`; the default name is the topic without its leading `/`, `:` turned into `/`.
+    pub fn topic(spec: &str) -> Self {
+        let (name, topic) = split_name(spec);
+        let name = name.unwrap_or_else(|| topic.trim_start_matches('/').replace(':', "/"));
+        NamedInput {
+            name,
+            input: TrajectoryInput::Topic(topic.to_string()),
+        }
+    }
+
+    /// Parses `[NAME=]PATH`; the default name is the file stem.
+    pub fn file(spec: &str) -> Self {
+        let (name, path) = split_name(spec);
+        let path = PathBuf::from(path);
+        let name = name.unwrap_or_else(|| path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
+        NamedInput {
+            name,
+            input: TrajectoryInput::TumFile(path),
+        }
+    }
+
+    /// The topic, or the file's path, as written in reports.
+    pub fn label(&self) -> String {
+        match &self.input {
+            TrajectoryInput::Topic(t) => t.clone(),
+            TrajectoryInput::TumFile(p) => p.display().to_string(),
+        }
+    }
+}
+
+fn split_name(spec: &str) -> (Option<String>, &str) {
+    match spec.split_once('=') {
+        Some((n, rest)) if !n.is_empty() && !n.contains('/') => (Some(n.to_string()), rest),
+        _ => (None, spec),
+    }
+}
+
+/// A full evaluation request.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EvalConfig {
+    /// The recording (needed when any input is a topic).
+    pub recording: Option<PathBuf>,
+    pub reference: NamedInput,
+    pub estimates: Vec<NamedInput>,
+    pub stamp: StampSource,
+    pub origin: Option<[f64; 3]>,
+    pub platform: Platform,
+    /// `--eps-min`: sets both ε (the paper's reading).
+    pub eps_min_m: Option<f64>,
+    pub curvature_eps_m: Option<f64>,
+    pub path_eps_m: Option<f64>,
+    pub theta_max_rad: f64,
+    pub dt_max_s: f64,
+    pub windows_m: Vec<f64>,
+    pub overlap: f64,
+    pub lever_correction: LeverCorrection,
+    pub lever_arm_m: f64,
+    pub offset_method: OffsetMethod,
+    pub max_offset_s: f64,
+    pub grid_s: f64,
+    /// Skip the search and apply this offset.
+    pub time_offset_s: Option<f64>,
+    /// Crop on the reference clock: absolute epoch seconds, or seconds from the reference's first
+    /// sample when below 1e8 (no recording is that close to 1970).
+    pub t_start: Option<f64>,
+    pub t_end: Option<f64>,
+}
+
+impl EvalConfig {
+    /// A request with the paper's defaults for `reference` and `estimates`.
+    pub fn new(recording: Option<PathBuf>, reference: NamedInput, estimates: Vec<NamedInput>) -> Self {
+        EvalConfig {
+            recording,
+            reference,
+            estimates,
+            stamp: StampSource::Header,
+            origin: None,
+            platform: Platform::Legged,
+            eps_min_m: None,
+            curvature_eps_m: None,
+            path_eps_m: None,
+            theta_max_rad: std::f64::consts::FRAC_PI_2,
+            dt_max_s: 2.0,
+            windows_m: vec![5.0],
+            overlap: 0.0,
+            lever_correction: LeverCorrection::Paper,
+            lever_arm_m: 0.1,
+            offset_method: OffsetMethod::Curvature,
+            max_offset_s: 30.0,
+            grid_s: 0.001,
+            time_offset_s: None,
+            t_start: None,
+            t_end: None,
+        }
+    }
+
+    /// ε for curvature: `--curvature-eps`, else `--eps-min`, else the platform's.
+    pub fn curvature_eps(&self) -> f64 {
+        self.curvature_eps_m.or(self.eps_min_m).unwrap_or(self.platform.eps_min_m())
+    }
+
+    /// ε for path lengths: `--path-eps`, else `--eps-min`, else the platform's.
+    pub fn path_eps(&self) -> f64 {
+        self.path_eps_m.or(self.eps_min_m).unwrap_or(self.platform.eps_min_m())
+    }
+
+    /// Eq. (1)'s parameters.
+    pub fn curvature_params(&self) -> CurvatureParams {
+        CurvatureParams {
+            eps_m: self.curvature_eps(),
+            theta_max_rad: self.theta_max_rad,
+            dt_max_s: self.dt_max_s,
+        }
+    }
+
+    /// The time-offset search's parameters.
+    pub fn offset_params(&self) -> OffsetParams {
+        OffsetParams {
+            max_offset_s: self.max_offset_s,
+            grid_s: self.grid_s,
+            curvature: self.curvature_params(),
+            ..OffsetParams::default()
+        }
+    }
+
+    /// Drift Error parameters for one window size.
+    pub fn drift_params(&self, window_m: f64) -> DriftParams {
+        DriftParams {
+            window_m,
+            overlap: self.overlap,
+            path_eps_m: self.path_eps(),
+            dt_max_s: self.dt_max_s,
+            lever_correction: self.lever_correction,
+            lever_arm_m: self.lever_arm_m,
+            curvature: self.curvature_params(),
+        }
+    }
+
+    /// Checks every value; the error says which flag is wrong and what it accepts.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::InvalidArgument(m));
+        let positive = |name: &str, v: f64| -> Result<()> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::InvalidArgument(format!("{name} must be a positive number, got {v}")))
+            }
+        };
+        if self.estimates.is_empty() {
+            return bad("give at least one --estimate TOPIC or --estimate-file FILE".into());
+        }
+        let needs_recording = std::iter::once(&self.reference)
+            .chain(&self.estimates)
+            .any(|i| matches!(i.input, TrajectoryInput::Topic(_)));
+        if needs_recording && self.recording.is_none() {
+            return bad("a topic was given but no RECORDING; pass the recording, or use --reference-file/--estimate-file".into());
+        }
+        let mut names: Vec<&str> = self.estimates.iter().map(|e| e.name.as_str()).collect();
+        names.sort();
+        if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+            return bad(format!("two estimates are named `{}`; name them with --estimate NAME=TOPIC", w[0]));
+        }
+        positive("--curvature-eps", self.curvature_eps())?;
+        positive("--path-eps", self.path_eps())?;
+        positive("--theta-max", self.theta_max_rad)?;
+        positive("--dt-max", self.dt_max_s)?;
+        positive("--max-offset", self.max_offset_s)?;
+        positive("--grid", self.grid_s)?;
+        if self.lever_arm_m.is_nan() || self.lever_arm_m < 0.0 {
+            return bad(format!("--lever-arm must be ≥ 0, got {}", self.lever_arm_m));
+        }
+        if self.windows_m.is_empty() {
+            return bad("--window needs at least one size in metres".into());
+        }
+        for &w in &self.windows_m {
+            positive("--window", w)?;
+        }
+        if !(0.0..1.0).contains(&self.overlap) {
+            return bad(format!("--overlap is a fraction in [0, 1), got {}", self.overlap));
+        }
+        if let (Some(a), Some(b)) = (self.t_start, self.t_end) {
+            if a >= b {
+                return bad(format!("--t-start ({a}) must be before --t-end ({b})"));
+            }
+        }
+        if let Some(dt) = self.time_offset_s {
+            if !dt.is_finite() {
+                return bad("--time-offset must be a finite number of seconds".into());
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_default_to_the_topic() {
+        assert_eq!(NamedInput::topic("/estimate/odom").name, "estimate/odom");
+        assert_eq!(NamedInput::topic("lio=/estimate/odom").name, "lio");
+        assert_eq!(NamedInput::topic("/tf:odom:base_link").name, "tf/odom/base_link");
+        assert_eq!(NamedInput::file("runs/est.tum").name, "est");
+    }
+
+    #[test]
+    fn eps_precedence() {
+        let mut c = EvalConfig::new(None, NamedInput::file("r.tum"), vec![NamedInput::file("e.tum")]);
+        assert_eq!(c.curvature_eps(), 0.1);
+        c.platform = Platform::Wheeled;
+        assert_eq!(c.path_eps(), 0.3);
+        c.eps_min_m = Some(1.0);
+        c.path_eps_m = Some(0.5);
+        assert_eq!((c.curvature_eps(), c.path_eps()), (1.0, 0.5));
+    }
+}

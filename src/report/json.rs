@@ -1,0 +1,164 @@
+//! The JSON report: the machine-readable result of an evaluation, with every parameter beside it.
+//!
+//! `schema_version` is bumped on any breaking change; `schemas/report.schema.json` describes it. Times in
+//! `per_window` and `excluded_intervals` are absolute seconds on the reference clock.
+
+use serde::{Deserialize, Serialize};
+
+use crate::sources::Warning;
+
+/// Current report layout version.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// The whole report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    pub schema_version: u32,
+    pub tool: Tool,
+    pub input: Input,
+    pub parameters: Parameters,
+    pub reference: TopicReport,
+    pub estimates: Vec<EstimateReport>,
+    /// Warnings the user must see (exit code 3).
+    pub warnings: Vec<Warning>,
+}
+
+/// Which program wrote the report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Tool {
+    pub name: String,
+    pub version: String,
+}
+
+impl Default for Tool {
+    fn default() -> Self {
+        Tool {
+            name: env!("CARGO_PKG_NAME").into(),
+            version: env!("CARGO_PKG_VERSION").into(),
+        }
+    }
+}
+
+/// The evaluated input.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Input {
+    /// The recording (or the reference text file when there is no recording).
+    pub path: String,
+    pub bytes: u64,
+}
+
+/// Every parameter that shaped the numbers.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Parameters {
+    pub platform: String,
+    pub curvature_eps_m: f64,
+    pub path_eps_m: f64,
+    pub theta_max_rad: f64,
+    pub dt_max_s: f64,
+    pub windows_m: Vec<f64>,
+    pub overlap: f64,
+    pub lever_arm_m: f64,
+    pub lever_correction: String,
+    pub max_offset_s: f64,
+    pub grid_s: f64,
+    pub offset_method: String,
+    /// The offset given with `--time-offset`, if any.
+    pub time_offset_s: Option<f64>,
+    pub stamp: String,
+    pub origin: Option<[f64; 3]>,
+    /// The crop, absolute seconds on the reference clock.
+    pub t_start: Option<f64>,
+    pub t_end: Option<f64>,
+}
+
+/// The reference side.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TopicReport {
+    /// Topic, or the text file it came from.
+    pub topic: String,
+    #[serde(rename = "type")]
+    pub type_name: String,
+    pub samples: usize,
+    /// ENU origin of a geodetic (NavSatFix) topic: latitude °, longitude °, height m.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub geodetic_origin: Option<[f64; 3]>,
+    /// Samples dropped as invalid (NO_FIX, NaN) or with a repeated stamp.
+    pub dropped_samples: u64,
+}
+
+/// One estimate's results.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EstimateReport {
+    pub name: String,
+    pub topic: String,
+    #[serde(rename = "type")]
+    pub type_name: String,
+    pub samples: usize,
+    pub dropped_samples: u64,
+    pub time_offset: TimeOffsetReport,
+    pub drift_error: Vec<DriftErrorReport>,
+}
+
+/// The clock offset: what each method found and what was applied.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TimeOffsetReport {
+    /// The method whose answer is reported (`given` when `--time-offset` was used).
+    pub method: String,
+    /// Its offset, seconds (t_est + offset = reference clock).
+    pub offset_s: f64,
+    /// The offset applied before Drift Error (0 when the search was weak and none was given).
+    pub applied_s: f64,
+    pub correlation: Option<f64>,
+    pub confidence: Option<f64>,
+    /// `ok`, `weak` or `given`.
+    pub status: String,
+    /// Every method that ran.
+    pub methods: Vec<OffsetMethodReport>,
+}
+
+/// One time-offset method's answer.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OffsetMethodReport {
+    pub method: String,
+    pub offset_s: Option<f64>,
+    pub correlation: Option<f64>,
+    pub confidence: Option<f64>,
+    /// `ok`, `weak`, or `failed` (then `error` says why).
+    pub status: String,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub error: Option<String>,
+}
+
+/// Drift Error at one window size.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DriftErrorReport {
+    pub window_m: f64,
+    pub lever_correction: String,
+    pub windows: usize,
+    pub dropped_windows: usize,
+    pub rmse: Option<f64>,
+    pub mean: Option<f64>,
+    pub median: Option<f64>,
+    pub std: Option<f64>,
+    pub q1: Option<f64>,
+    pub q3: Option<f64>,
+    pub p95: Option<f64>,
+    pub min: Option<f64>,
+    pub max: Option<f64>,
+    /// Share of samples skipped by the ε-decimation of path lengths.
+    pub discarded_fraction: f64,
+    /// Rotation in place (the reference still, the estimate sweeping an arc): excluded, [start, end] s.
+    pub excluded_intervals: Vec<[f64; 2]>,
+    pub per_window: Vec<WindowReport>,
+}
+
+/// One Drift Error window.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WindowReport {
+    pub t_start: f64,
+    pub t_end: f64,
+    pub ref_length_m: f64,
+    pub est_length_m: f64,
+    pub alpha: f64,
+    pub de: f64,
+}

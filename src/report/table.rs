@@ -1,0 +1,83 @@
+//! The short human-readable table `trajdrift eval` prints: one block per estimate with Δt, ρ, status and
+//! the Drift Error per window size.
+
+use std::fmt::Write;
+
+use crate::report::json::Report;
+
+fn pct(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{:.2}%", v * 100.0))
+}
+
+/// Renders `report` as text.
+pub fn render(report: &Report) -> String {
+    let mut s = String::new();
+    let p = &report.parameters;
+    let _ = writeln!(
+        s,
+        "reference {} ({}, {} samples); ε curvature {} m, path {} m, Δt_max {} s, lever correction {}",
+        report.reference.topic,
+        report.reference.type_name,
+        report.reference.samples,
+        p.curvature_eps_m,
+        p.path_eps_m,
+        p.dt_max_s,
+        p.lever_correction
+    );
+    for e in &report.estimates {
+        let o = &e.time_offset;
+        let _ = writeln!(s, "\nestimate {} ({}, {}, {} samples)", e.name, e.topic, e.type_name, e.samples);
+        let _ = writeln!(
+            s,
+            "  time offset  {:+.4} s  applied {:+.4} s  method {}  ρ {}  confidence {}  status {}",
+            o.offset_s,
+            o.applied_s,
+            o.method,
+            o.correlation.map_or("-".into(), |c| format!("{c:.3}")),
+            o.confidence.map_or("-".into(), |c| format!("{c:.2}")),
+            o.status
+        );
+        for m in &o.methods {
+            let _ = writeln!(
+                s,
+                "    {:<10} {}  ρ {}  confidence {}  {}",
+                m.method,
+                m.offset_s.map_or("      -".into(), |v| format!("{v:+.4} s")),
+                m.correlation.map_or("-".into(), |c| format!("{c:.3}")),
+                m.confidence.map_or("-".into(), |c| format!("{c:.2}")),
+                m.error.as_deref().unwrap_or(&m.status)
+            );
+        }
+        let _ = writeln!(
+            s,
+            "  {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>10}",
+            "window", "DE rmse", "median", "IQR", "windows", "dropped", "discarded"
+        );
+        for d in &e.drift_error {
+            let iqr = match (d.q1, d.q3) {
+                (Some(a), Some(b)) => Some(b - a),
+                _ => None,
+            };
+            let _ = writeln!(
+                s,
+                "  {:>7}m {:>8} {:>8} {:>8} {:>8} {:>8} {:>9.1}%",
+                d.window_m,
+                pct(d.rmse),
+                pct(d.median),
+                pct(iqr),
+                d.windows,
+                d.dropped_windows,
+                d.discarded_fraction * 100.0
+            );
+        }
+        if let Some(d) = e.drift_error.first() {
+            if !d.excluded_intervals.is_empty() {
+                let _ = writeln!(s, "  rotation in place excluded: {} intervals", d.excluded_intervals.len());
+            }
+        }
+    }
+    for w in &report.warnings {
+        let _ = writeln!(s, "\nwarning [{}]: {}", w.code, w.message);
+    }
+    s
+}

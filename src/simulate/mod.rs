@@ -1,0 +1,147 @@
+//! Simulated missions with known truth: a rigid body carrying a reference sensor and an estimate
+//! sensor at a lever arm, an estimate with a distance scale error and a clock offset, noisy reference.
+//!
+//! The project's own fixtures (`fixtures/`) are written by this module (`trajdrift simulate`), so the
+//! README's first command runs on data we can regenerate and whose truth we know.
+
+pub mod motion;
+pub mod writer;
+
+use nalgebra::{UnitQuaternion, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+use crate::trajectory::Trajectory;
+use motion::{integrate, state_at, Segment};
+
+/// Everything that defines a simulated mission.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct MissionConfig {
+    pub seed: u64,
+    /// Stamp of the first sample, ns since the epoch.
+    pub start_time_ns: i64,
+    pub ref_rate_hz: f64,
+    pub est_rate_hz: f64,
+    /// White noise on each reference coordinate, metres (1σ).
+    pub ref_noise_m: f64,
+    /// White noise on each estimate coordinate, metres (1σ).
+    pub est_noise_m: f64,
+    /// Reference sensor position in the body frame (x forward, y left, z up), metres.
+    pub ref_lever_m: [f64; 3],
+    /// Estimate sensor position in the body frame, metres.
+    pub est_lever_m: [f64; 3],
+    /// Δt: estimate stamps + Δt = reference clock.
+    pub time_offset_s: f64,
+    /// The estimate's distance scale error (0.02 = 2 % too long).
+    pub scale_error: f64,
+}
+
+impl Default for MissionConfig {
+    /// A small wheeled mission: 10 Hz reference with 2 cm noise, 20 Hz estimate 0.3 m to the left of
+    /// it, 2 % scale error, Δt = +0.2 s.
+    fn default() -> Self {
+        MissionConfig {
+            seed: 7,
+            start_time_ns: 1_718_460_000_000_000_000,
+            ref_rate_hz: 10.0,
+            est_rate_hz: 20.0,
+            ref_noise_m: 0.02,
+            est_noise_m: 0.003,
+            ref_lever_m: [0.0, 0.0, 0.0],
+            est_lever_m: [0.0, 0.3, 0.0],
+            time_offset_s: 0.2,
+            scale_error: 0.02,
+        }
+    }
+}
+
+/// A simulated mission: what the sensors published, and the truth.
+#[derive(Debug, Clone)]
+pub struct Mission {
+    pub config: MissionConfig,
+    /// Reference positions (world ENU), stamped on the true clock.
+    pub reference: Trajectory,
+    /// Estimate poses in its own odometry frame (starts at the identity), stamped on its own clock.
+    pub estimate: Trajectory,
+    /// True path length of the body, metres.
+    pub body_path_m: f64,
+    pub duration_s: f64,
+}
+
+/// The default route: a stop, S-curves, loops left and right, straights, stops; about 150 s.
+pub fn default_route() -> Vec<Segment> {
+    let s = |d: f64, v: f64, k: f64| Segment {
+        duration_s: d,
+        speed_mps: v,
+        curvature: k,
+    };
+    vec![
+        s(3.0, 0.0, 0.0),
+        s(12.0, 1.5, 0.0),
+        s(10.0, 1.5, 0.15),
+        s(6.0, 1.8, 0.0),
+        s(12.0, 1.2, -0.25),
+        s(8.0, 2.0, 0.0),
+        s(3.0, 0.0, 0.0),
+        s(10.0, 1.0, 0.3),
+        s(10.0, 1.6, -0.1),
+        s(12.0, 1.4, 0.2),
+        s(8.0, 2.0, 0.0),
+        s(14.0, 1.0, -0.35),
+        s(10.0, 1.5, 0.05),
+        s(3.0, 0.0, 0.0),
+    ]
+}
+
+/// Simulates `config` on `route`.
+pub fn simulate(config: &MissionConfig, route: &[Segment]) -> Mission {
+    const RATE: f64 = 1000.0;
+    let states = integrate(route, RATE, 0.4, 1.0);
+    let duration_s = states.last().map_or(0.0, |s| s.t);
+    let body_path_m = states.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
+    let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
+    let lever = |l: [f64; 3]| Vector3::new(l[0], l[1], l[2]);
+    let sensor = |t: f64, l: &Vector3<f64>| {
+        let s = state_at(&states, RATE, t);
+        let r = UnitQuaternion::from_euler_angles(0.0, 0.0, s.yaw);
+        (s.position + r * l, r)
+    };
+
+    let mut reference = Trajectory::new(false);
+    let ref_lever = lever(config.ref_lever_m);
+    let n_ref = (duration_s * config.ref_rate_hz).floor() as usize + 1;
+    for i in 0..n_ref {
+        let t = i as f64 / config.ref_rate_hz;
+        let (p, _) = sensor(t, &ref_lever);
+        let noise = white(&mut rng, config.ref_noise_m);
+        reference.push(config.start_time_ns + (t * 1e9).round() as i64, p + noise, None);
+    }
+
+    // The estimate: increments of its sensor's true path, scaled, in a frame that starts at the identity.
+    let mut estimate = Trajectory::new(true);
+    let est_lever = lever(config.est_lever_m);
+    let (p0, r0) = sensor(0.0, &est_lever);
+    let n_est = (duration_s * config.est_rate_hz).floor() as usize + 1;
+    for i in 0..n_est {
+        let t_true = i as f64 / config.est_rate_hz;
+        let (p, r) = sensor(t_true, &est_lever);
+        let local = r0.inverse() * (p - p0) * (1.0 + config.scale_error);
+        let noise = white(&mut rng, config.est_noise_m);
+        let stamp = config.start_time_ns + ((t_true - config.time_offset_s) * 1e9).round() as i64;
+        estimate.push(stamp, local + noise, Some(r0.inverse() * r));
+    }
+    Mission {
+        config: config.clone(),
+        reference,
+        estimate,
+        body_path_m,
+        duration_s,
+    }
+}
+
+/// Three independent Gaussian samples of standard deviation `sigma`.
+fn white(rng: &mut ChaCha8Rng, sigma: f64) -> Vector3<f64> {
+    let mut g = || -> f64 { StandardNormal.sample(rng) };
+    Vector3::new(g(), g(), g()) * sigma
+}

@@ -1,0 +1,192 @@
+//! The command line as a user meets it: exit codes, one-line errors, negative numbers as values, JSON
+//! output. Recordings are written by the project's own simulator into temporary folders.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use trajdrift::simulate::writer::write_mcap;
+use trajdrift::simulate::{default_route, simulate, MissionConfig};
+use trajdrift::sources::tum::write_tum;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("run trajdrift")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A simulated mission with a small unrelated bulk channel, as MCAP and TUM files.
+fn recording(dir: &Path) -> PathBuf {
+    let mission = simulate(&MissionConfig::default(), &default_route());
+    let path = dir.join("mission.mcap");
+    write_mcap(std::io::BufWriter::new(std::fs::File::create(&path).unwrap()), &mission, 256).unwrap();
+    write_tum(std::fs::File::create(dir.join("reference.tum")).unwrap(), &mission.reference).unwrap();
+    write_tum(std::fs::File::create(dir.join("estimate.tum")).unwrap(), &mission.estimate).unwrap();
+    path
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn eval_prints_a_table_and_writes_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = recording(dir.path());
+    let json = dir.path().join("out.json");
+    let o = run(&[
+        "eval", s(&rec), "--reference", "/reference/position", "--estimate", "lio=/estimate/odom",
+        "--platform", "wheeled", "--window", "1,5,10", "--offset-method", "speed", "--json", s(&json),
+    ]);
+    assert!(o.status.code() == Some(0) || o.status.code() == Some(3), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("estimate lio"), "{out}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["schema_version"], 1);
+    assert_eq!(report["estimates"][0]["drift_error"].as_array().unwrap().len(), 3);
+    let dt = report["estimates"][0]["time_offset"]["offset_s"].as_f64().unwrap();
+    assert!((dt - 0.2).abs() < 0.03, "speed offset {dt}");
+    assert_eq!(report["parameters"]["path_eps_m"], 0.3);
+}
+
+#[test]
+fn negative_numbers_are_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = recording(dir.path());
+    let o = run(&[
+        "eval", s(&rec), "--reference", "/reference/position", "--estimate", "/estimate/odom",
+        "--time-offset", "-0.35", "--origin", "-33.9,151.2,40", "--t-start", "-5", "--json", "-",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["estimates"][0]["time_offset"]["applied_s"], -0.35);
+    assert_eq!(report["parameters"]["origin"][0], -33.9);
+}
+
+#[test]
+fn missing_topic_lists_the_topics_present() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = recording(dir.path());
+    let o = run(&["eval", s(&rec), "--reference", "/nope", "--estimate", "/estimate/odom"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("/nope") && e.contains("/reference/position") && e.contains("mission.mcap"), "{e}");
+    assert_eq!(e.trim().lines().count(), 1, "{e}");
+}
+
+#[test]
+fn unsupported_type_lists_the_supported_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = recording(dir.path());
+    let o = run(&["eval", s(&rec), "--reference", "/reference/position", "--estimate", "/camera/raw"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("sensor_msgs/msg/Image") && e.contains("nav_msgs/msg/Odometry"), "{e}");
+}
+
+#[test]
+fn too_few_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    recording(dir.path());
+    let short = dir.path().join("short.tum");
+    std::fs::write(&short, "1718460000.0 0 0 0 0 0 0 1\n1718460001.0 1 0 0 0 0 0 1\n").unwrap();
+    let o = run(&["eval", "--reference-file", s(&dir.path().join("reference.tum")), "--estimate-file", s(&short)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("only 2 usable samples"), "{}", stderr(&o));
+}
+
+#[test]
+fn no_time_overlap() {
+    let dir = tempfile::tempdir().unwrap();
+    let mission = simulate(&MissionConfig::default(), &default_route());
+    let late = mission.estimate.shifted(3_600_000_000_000);
+    write_tum(std::fs::File::create(dir.path().join("r.tum")).unwrap(), &mission.reference).unwrap();
+    write_tum(std::fs::File::create(dir.path().join("e.tum")).unwrap(), &late).unwrap();
+    for extra in [&[][..], &["--time-offset", "0"][..]] {
+        let mut args = vec!["eval", "--reference-file"];
+        let (r, e) = (dir.path().join("r.tum"), dir.path().join("e.tum"));
+        args.extend([s(&r), "--estimate-file", s(&e)]);
+        args.extend(extra);
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(stderr(&o).contains("do not overlap"), "{}", stderr(&o));
+    }
+}
+
+#[test]
+fn not_an_mcap_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let txt = dir.path().join("notes.mcap");
+    std::fs::write(&txt, "this is not a recording\n").unwrap();
+    let o = run(&["eval", s(&txt), "--reference", "/a", "--estimate", "/b"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("notes.mcap") && e.contains("not an MCAP"), "{e}");
+    let o = run(&["topics", s(&txt)]);
+    assert_eq!(o.status.code(), Some(1));
+}
+
+#[test]
+fn truncated_recording_is_read_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = recording(dir.path());
+    let bytes = std::fs::read(&rec).unwrap();
+    let cut = dir.path().join("cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() * 7 / 10]).unwrap();
+    let o = run(&[
+        "eval", s(&cut), "--reference", "/reference/position", "--estimate", "/estimate/odom",
+        "--time-offset", "0.2", "--json", "-",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(stderr(&o).contains("truncated"), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let n = report["reference"]["samples"].as_u64().unwrap();
+    assert!(n > 100 && n < 1500, "{n}");
+    assert_eq!(std::fs::read(&rec).unwrap(), bytes, "the input is never modified");
+}
+
+#[test]
+fn topics_lists_channels() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = recording(dir.path());
+    let o = run(&["topics", s(&rec)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("/reference/position") && out.contains("/camera/raw"), "{out}");
+    let o = run(&["topics", s(&rec), "--json", "-"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let odom = v.as_array().unwrap().iter().find(|t| t["topic"] == "/estimate/odom").unwrap();
+    assert_eq!(odom["readable"], true);
+    assert!(odom["message_count"].as_u64().unwrap() > 2000);
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    assert_eq!(run(&["eval", "--estimate", "/x"]).status.code(), Some(2));
+    assert_eq!(run(&["frobnicate"]).status.code(), Some(2));
+}
+
+#[test]
+fn weak_offset_exits_3_and_still_writes_json() {
+    // A straight line at constant speed: neither curvature nor speed can tell the offset.
+    let dir = tempfile::tempdir().unwrap();
+    let route = [trajdrift::simulate::motion::Segment { duration_s: 60.0, speed_mps: 1.5, curvature: 0.0 }];
+    let cfg = MissionConfig { ref_noise_m: 0.0, est_noise_m: 0.0, ..MissionConfig::default() };
+    let mission = simulate(&cfg, &route);
+    let mut reference = mission.reference.clone();
+    reference.crop(Some(cfg.start_time_ns + 5_000_000_000), None);
+    write_tum(std::fs::File::create(dir.path().join("r.tum")).unwrap(), &reference).unwrap();
+    write_tum(std::fs::File::create(dir.path().join("e.tum")).unwrap(), &mission.estimate).unwrap();
+    let json = dir.path().join("weak.json");
+    let (r, e) = (dir.path().join("r.tum"), dir.path().join("e.tum"));
+    let o = run(&["eval", "--reference-file", s(&r), "--estimate-file", s(&e), "--json", s(&json), "--quiet"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["estimates"][0]["time_offset"]["status"], "weak");
+    assert_eq!(report["estimates"][0]["time_offset"]["applied_s"], 0.0);
+}
