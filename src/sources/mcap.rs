@@ -1,1 +1,0 @@
-//! Streaming MCAP source (placeholder, being written).

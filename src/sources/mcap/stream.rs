@@ -1,0 +1,234 @@
+//! The one streaming pass over an MCAP file that every read builds on.
+//!
+//! `mcap::sans_io::LinearReader` walks the records in file order, decompressing zstd/lz4 chunks a piece
+//! at a time, so memory follows the largest record, not the file. We keep only channel and schema
+//! names; a message on a channel nobody asked for is recognised by its first two bytes (the channel
+//! id) and dropped without being parsed or copied. The pass stops at the Data End record (the summary
+//! after it only repeats what was read). A file that ends early (a recorder that crashed: no Data End,
+//! no footer, a chunk cut in half) yields every record before the cut and reports where it was cut.
+
+use std::collections::HashMap;
+use std::io::Read;
+use std::path::Path;
+
+use mcap::records::{op, Record};
+use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use mcap::McapError;
+
+use crate::error::{Error, Result};
+use crate::sources::Progress;
+
+/// One channel of a recording, with its schema's name.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ChannelInfo {
+    /// Channel id, unique within the file.
+    pub id: u16,
+    pub topic: String,
+    /// Schema name, e.g. `geometry_msgs/msg/PoseStamped`; empty for schemaless channels.
+    pub schema_name: String,
+    /// Schema encoding, e.g. `ros2msg`; empty for schemaless channels.
+    pub schema_encoding: String,
+    /// Message encoding, e.g. `cdr`.
+    pub message_encoding: String,
+}
+
+/// A message on a selected channel, borrowed from the reader's buffer.
+#[derive(Debug, Clone, Copy)]
+pub struct MessageRef<'a> {
+    pub channel_id: u16,
+    pub sequence: u32,
+    /// Nanoseconds; when the recorder received the message.
+    pub log_time: u64,
+    /// Nanoseconds; when the publisher sent it.
+    pub publish_time: u64,
+    /// The serialized message (CDR for ROS 2).
+    pub data: &'a [u8],
+}
+
+/// What one pass learned about the whole file.
+#[derive(Debug, Clone, Default)]
+pub struct StreamOutcome {
+    /// Every channel, in the order of first appearance (a repeated channel record is listed once).
+    pub channels: Vec<ChannelInfo>,
+    /// Messages per channel id, selected or not.
+    pub message_counts: HashMap<u16, u64>,
+    /// Bytes read from the file.
+    pub bytes_read: u64,
+    /// `Some(offset)` when the file ended inside a record (or before its Data End record): everything
+    /// before was read, `offset` is where the file stops.
+    pub truncated_at: Option<u64>,
+}
+
+/// How many bytes to ask the OS for at least per read: fewer syscalls than the reader's
+/// per-record requests (a buffered reader would copy the bytes twice).
+const MIN_READ: usize = 256 * 1024;
+
+/// Progress is reported at most once per this many bytes.
+const PROGRESS_STEP: u64 = 1 << 20;
+
+/// Reads `path` once, in file order. `select` is asked once per channel (at its first record) whether
+/// its messages are wanted; `on_message` gets every message of a selected channel. Returns what was
+/// learned about all channels. A truncated file is not an error (see [`StreamOutcome::truncated_at`]);
+/// damage elsewhere is [`Error::CorruptMcap`], a bad magic [`Error::NotMcap`], an error returned by
+/// `on_message` stops the pass and is returned as is.
+pub fn for_each_message<S, F>(
+    path: &Path,
+    mut select: S,
+    progress: Progress<'_>,
+    mut on_message: F,
+) -> Result<StreamOutcome>
+where
+    S: FnMut(&ChannelInfo) -> bool,
+    F: FnMut(&ChannelInfo, &MessageRef<'_>) -> Result<()>,
+{
+    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file_size = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    let magic = read_magic(&mut file, path)?;
+    // A record cannot be longer than the file, except a record inside a compressed chunk; the limit
+    // keeps a corrupt length from allocating gigabytes before the read fails.
+    let limit = usize::try_from(file_size.max(256 << 20)).unwrap_or(usize::MAX);
+    let mut reader = LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_validate_chunk_crcs(true)
+            .with_record_length_limit(limit),
+    );
+
+    reader.insert(magic.len()).copy_from_slice(&magic);
+    reader.notify_read(magic.len());
+
+    let mut schemas: HashMap<u16, (String, String)> = HashMap::new();
+    // Channel id → (index into outcome.channels, selected).
+    let mut channels: HashMap<u16, (usize, bool)> = HashMap::new();
+    let mut out = StreamOutcome {
+        bytes_read: magic.len() as u64,
+        ..Default::default()
+    };
+    let mut last_progress = 0u64;
+    let corrupt = |detail: String| Error::CorruptMcap {
+        path: path.to_path_buf(),
+        detail,
+    };
+
+    while let Some(event) = reader.next_event() {
+        let event = match event {
+            Ok(event) => event,
+            Err(McapError::UnexpectedEof) => {
+                out.truncated_at = Some(out.bytes_read);
+                break;
+            }
+            Err(e) => {
+                return Err(corrupt(format!(
+                    "{e} (before byte {} of {file_size})",
+                    out.bytes_read
+                )))
+            }
+        };
+        match event {
+            LinearReadEvent::ReadRequest(need) => {
+                let buf = reader.insert(need.max(MIN_READ));
+                let n = read_retrying(&mut file, buf).map_err(|e| Error::io(path, e))?;
+                reader.notify_read(n);
+                out.bytes_read += n as u64;
+                if out.bytes_read - last_progress >= PROGRESS_STEP {
+                    last_progress = out.bytes_read;
+                    progress(out.bytes_read);
+                }
+            }
+            LinearReadEvent::Record { opcode, data } => match opcode {
+                op::MESSAGE => {
+                    // The channel id is the first field: skip unselected messages unparsed.
+                    let Some(id) = data.get(..2).map(|b| u16::from_le_bytes([b[0], b[1]])) else {
+                        return Err(corrupt(format!(
+                            "message record of {} bytes (before byte {})",
+                            data.len(),
+                            out.bytes_read
+                        )));
+                    };
+                    *out.message_counts.entry(id).or_default() += 1;
+                    let Some(&(index, true)) = channels.get(&id) else {
+                        continue;
+                    };
+                    let Record::Message { header, data } = mcap::parse_record(opcode, data)
+                        .map_err(|e| corrupt(format!("message record: {e}")))?
+                    else {
+                        continue;
+                    };
+                    let message = MessageRef {
+                        channel_id: header.channel_id,
+                        sequence: header.sequence,
+                        log_time: header.log_time,
+                        publish_time: header.publish_time,
+                        data: &data,
+                    };
+                    on_message(&out.channels[index], &message)?;
+                }
+                op::SCHEMA => {
+                    if let Ok(Record::Schema { header, .. }) = mcap::parse_record(opcode, data) {
+                        schemas
+                            .entry(header.id)
+                            .or_insert((header.name, header.encoding));
+                    }
+                }
+                op::CHANNEL => {
+                    let Record::Channel(c) = mcap::parse_record(opcode, data)
+                        .map_err(|e| corrupt(format!("channel record: {e}")))?
+                    else {
+                        continue;
+                    };
+                    if channels.contains_key(&c.id) {
+                        continue;
+                    }
+                    let (schema_name, schema_encoding) =
+                        schemas.get(&c.schema_id).cloned().unwrap_or_default();
+                    let info = ChannelInfo {
+                        id: c.id,
+                        topic: c.topic,
+                        schema_name,
+                        schema_encoding,
+                        message_encoding: c.message_encoding,
+                    };
+                    let selected = select(&info);
+                    channels.insert(info.id, (out.channels.len(), selected));
+                    out.channels.push(info);
+                }
+                op::DATA_END => break,
+                _ => {}
+            },
+        }
+    }
+    progress(out.bytes_read);
+    Ok(out)
+}
+
+/// Reads the first 8 bytes and checks they are the MCAP magic: [`Error::NotMcap`] otherwise.
+pub(crate) fn read_magic(file: &mut std::fs::File, path: &Path) -> Result<[u8; 8]> {
+    let mut magic = [0u8; 8];
+    let mut got = 0;
+    while got < magic.len() {
+        match read_retrying(file, &mut magic[got..]).map_err(|e| Error::io(path, e))? {
+            0 => break,
+            n => got += n,
+        }
+    }
+    if got < magic.len() || magic[..] != *mcap::MAGIC {
+        return Err(Error::NotMcap {
+            path: path.to_path_buf(),
+            detail: if got < magic.len() {
+                format!("{got} bytes, shorter than the 8-byte magic")
+            } else {
+                "the file does not start with the MCAP magic".into()
+            },
+        });
+    }
+    Ok(magic)
+}
+
+/// `Read::read`, retried when interrupted by a signal.
+fn read_retrying(file: &mut std::fs::File, buf: &mut [u8]) -> std::io::Result<usize> {
+    loop {
+        match file.read(buf) {
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            other => return other,
+        }
+    }
+}

@@ -1,0 +1,83 @@
+//! The summary section at the end of an MCAP file: channels and message counts without reading the
+//! data, so that `topics` is instant and `extract` can reject a wrong topic before the pass.
+//!
+//! Optional by the format: a file without summary (or one cut short, which has no footer) reads as
+//! `None` and the callers fall back to the streaming pass.
+
+use std::collections::HashMap;
+use std::io::{Read, Seek};
+use std::path::Path;
+
+use mcap::sans_io::{SummaryReadEvent, SummaryReader, SummaryReaderOptions};
+
+use super::stream::ChannelInfo;
+
+/// What the summary says.
+#[derive(Debug, Clone, Default)]
+pub struct SummaryInfo {
+    /// Channels listed in the summary, by id.
+    pub channels: Vec<ChannelInfo>,
+    /// Messages per channel id, when the summary holds a Statistics record.
+    pub message_counts: Option<HashMap<u16, u64>>,
+}
+
+/// Reads the summary of `path`. `None` when the file has no summary, no channel in it, or no valid
+/// footer (a truncated file): the caller reads the data section instead.
+pub fn read_summary(path: &Path) -> Option<SummaryInfo> {
+    let mut file = std::fs::File::open(path).ok()?;
+    let size = file.metadata().ok()?.len();
+    let mut reader = SummaryReader::new_with_options(
+        SummaryReaderOptions::default()
+            .with_file_size(size)
+            // The summary of a file of gigabytes is kilobytes; a longer record is damage.
+            .with_record_length_limit(64 << 20),
+    );
+    while let Some(event) = reader.next_event() {
+        match event.ok()? {
+            SummaryReadEvent::ReadRequest(n) => {
+                let read = file.read(reader.insert(n)).ok()?;
+                reader.notify_read(read);
+            }
+            SummaryReadEvent::SeekRequest(to) => {
+                let pos = file.seek(to).ok()?;
+                reader.notify_seeked(pos);
+            }
+        }
+    }
+    let summary = reader.finish()?;
+    if summary.channels.is_empty() {
+        return None;
+    }
+    let mut channels: Vec<ChannelInfo> = summary
+        .channels
+        .values()
+        .map(|c| {
+            let (schema_name, schema_encoding) = c
+                .schema
+                .as_ref()
+                .map(|s| (s.name.clone(), s.encoding.clone()))
+                .unwrap_or_default();
+            ChannelInfo {
+                id: c.id,
+                topic: c.topic.clone(),
+                schema_name,
+                schema_encoding,
+                message_encoding: c.message_encoding.clone(),
+            }
+        })
+        .collect();
+    channels.sort_by_key(|c| c.id);
+    // Per-channel counts are optional within Statistics: an empty map with messages means "not counted".
+    let message_counts = summary
+        .stats
+        .filter(|s| s.message_count == 0 || !s.channel_message_counts.is_empty())
+        .map(|s| {
+            s.channel_message_counts
+                .into_iter()
+                .collect::<HashMap<u16, u64>>()
+        });
+    Some(SummaryInfo {
+        channels,
+        message_counts,
+    })
+}
