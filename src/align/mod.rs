@@ -1,3 +1,7 @@
 //! Time alignment: find the clock offset Δt between an estimate and its reference from positions alone.
 
 pub mod curvature;
+pub mod grid;
+pub mod speed;
+pub mod time_offset;
+pub mod xcorr;
