@@ -1,7 +1,8 @@
 //! Drift Error on the shared simulated missions (truth in truth.json) and its invariants (proptest).
 //!
 //! The fixtures' estimate is shifted by the true clock offset (truth.json `time_offset.dt_true_s`); times
-//! are seconds relative to the reference's first stamp. Unless a test says otherwise, path_eps = 0.3 m.
+//! are seconds relative to the reference's first stamp. Unless a test says otherwise, path_eps = 1.0 m (the
+//! default: the fixtures' reference has 2 cm of noise, which inflates shorter chords, see de_table).
 
 use std::path::PathBuf;
 
@@ -38,7 +39,9 @@ fn load(name: &str) -> Mission {
         &std::fs::read_to_string(dir.join("truth.json")).expect("truth.json readable"),
     )
     .expect("truth.json is JSON");
-    let dt = truth["time_offset"]["dt_true_s"].as_f64().expect("dt_true_s");
+    let dt = truth["time_offset"]["dt_true_s"]
+        .as_f64()
+        .expect("dt_true_s");
     let start_ns = truth["start_time_ns"].as_i64().expect("start_time_ns");
     let r = read_tum(&dir.join("reference.tum")).expect("reference.tum");
     let e = read_tum(&dir.join("estimate.tum")).expect("estimate.tum");
@@ -68,7 +71,7 @@ const MEDIAN_MISSIONS: [&str; 4] = ["lever_arm", "gnss_outages", "legged", "stra
 
 #[test]
 fn median_de_at_5m_recovers_the_scale_error() {
-    // path_eps = 0.3 m, lever arm a = 0.1 m (the default), both corrections.
+    // path_eps = 1.0 m, lever arm a = 0.1 m (the defaults), both corrections.
     for m in MEDIAN_MISSIONS {
         let ms = load(m);
         let scale = ms.truth["estimate_model"]["scale_error"]
@@ -80,7 +83,7 @@ fn median_de_at_5m_recovers_the_scale_error() {
                 &ms.ref_p,
                 &ms.est_t,
                 &ms.est_p,
-                &params(0.3, corr, 0.1),
+                &params(1.0, corr, 0.1),
             )
             .expect("drift error");
             let s = r.stats.expect("windows");
@@ -110,7 +113,7 @@ fn legged_spins_are_excluded() {
         &ms.ref_p,
         &ms.est_t,
         &ms.est_p,
-        &params(0.3, LeverCorrection::Paper, 0.1),
+        &params(1.0, LeverCorrection::Paper, 0.1),
     )
     .expect("drift error");
     let spins = ms.truth["spins"]["intervals"].as_array().expect("spins");
@@ -244,9 +247,13 @@ proptest! {
         }
         let paper = drift_error(&t, &rp, &t, &ep, &params(0.3, LeverCorrection::Paper, 0.1)).unwrap();
         let none = drift_error(&t, &rp, &t, &ep, &params(0.3, LeverCorrection::None, 0.1)).unwrap();
-        let sp = paper.stats.unwrap();
         let sn = none.stats.unwrap();
-        prop_assert!(sp.max < 1e-3, "paper: max DE {} (none: {})", sp.max, sn.median);
+        // The first window starts before either curvature signature is defined (eq. 1 needs an ε-chord
+        // on both sides), so α = 1 on its first segments: it is left out.
+        prop_assert!(paper.windows.len() > 3);
+        for w in &paper.windows[1..] {
+            prop_assert!(w.de < 1e-3, "paper: DE {} at {} s (none: {})", w.de, w.t_start, sn.median);
+        }
         prop_assert!((sn.median - (d / r).abs()).abs() < 2e-3, "none: {} vs {}", sn.median, d / r);
     }
 }

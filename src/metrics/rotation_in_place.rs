@@ -11,13 +11,14 @@
 //! `min_still_s` (the paper's Δt_max: no ε-chord within Δt_max), not crossing a sampling gap longer than
 //! `min_still_s`. A reference rotating about a point within `still_radius_m` of it (radius ~0) is a
 //! standstill too. The standstill is a rotation in place when, over the same time span, the estimate
-//! (already on the reference clock) moves more than twice `still_radius_m` away from where it was at the
-//! start: more than the reference's own wobble inside its ball could explain. Plain stops, where both
+//! (already on the reference clock) travels more than `still_radius_m` further than the reference, both
+//! paths measured on polylines decimated with ε = `still_radius_m` (so that the reference's noise inside
+//! its ball counts ~0, while the slow approach into the stop counts on both sides). Plain stops, where both
 //! stand still, are not reported (both paths are ~0 there anyway).
 
 use nalgebra::Vector3;
 
-use super::decimate::interpolate_position;
+use super::decimate::{interpolate_position, DecimatedPath};
 
 /// Parameters of the rotation-in-place detector.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -35,6 +36,26 @@ impl Default for RotationInPlaceParams {
             min_still_s: 2.0,
         }
     }
+}
+
+/// The samples of a trajectory inside `[t0, t1]`, with the positions interpolated at both ends.
+fn slice_between(
+    times: &[f64],
+    positions: &[Vector3<f64>],
+    t0: f64,
+    t1: f64,
+) -> (Vec<f64>, Vec<Vector3<f64>>) {
+    let i0 = times.partition_point(|&x| x <= t0);
+    let i1 = times.partition_point(|&x| x < t1).max(i0);
+    let mut t = Vec::with_capacity(i1 - i0 + 2);
+    let mut p = Vec::with_capacity(i1 - i0 + 2);
+    t.push(t0);
+    p.push(interpolate_position(times, positions, t0));
+    t.extend_from_slice(&times[i0..i1]);
+    p.extend_from_slice(&positions[i0..i1]);
+    t.push(t1);
+    p.push(interpolate_position(times, positions, t1));
+    (t, p)
 }
 
 /// Standstill intervals `[t_start, t_end]` of a trajectory (seconds), in time order.
@@ -82,21 +103,18 @@ pub fn rotations_in_place(
         return Vec::new();
     }
     let (est_t, est_p) = (&est_t[..n_est], &est_p[..n_est]);
-    let sweep_min = 2.0 * params.still_radius_m;
+    let eps = params.still_radius_m;
     standstills(ref_t, ref_p, params)
         .into_iter()
         .filter(|&[t0, t1]| {
             if t1 < est_t[0] || t0 > est_t[n_est - 1] {
                 return false;
             }
-            let start = interpolate_position(est_t, est_p, t0);
-            let end = interpolate_position(est_t, est_p, t1);
-            let i0 = est_t.partition_point(|&x| x <= t0);
-            let i1 = est_t.partition_point(|&x| x < t1);
-            let inner = est_p[i0..i1.max(i0)].iter();
-            inner
-                .chain(std::iter::once(&end))
-                .any(|p| (p - start).norm() > sweep_min)
+            let (et, ep) = slice_between(est_t, est_p, t0, t1);
+            let (rt, rp) = slice_between(ref_t, ref_p, t0, t1);
+            let est_len = DecimatedPath::new(&et, &ep, eps, &[]).length_between(t0, t1);
+            let ref_len = DecimatedPath::new(&rt, &rp, eps, &[]).length_between(t0, t1);
+            est_len - ref_len > eps
         })
         .collect()
 }
@@ -116,7 +134,7 @@ mod tests {
         let mut x = 0.0;
         for i in 0..=250 {
             let t = i as f64 * 0.1;
-            if t < 5.0 || t >= 20.0 {
+            if !(5.0..20.0).contains(&t) {
                 x += 0.1;
             }
             if (10.0..15.0).contains(&t) {

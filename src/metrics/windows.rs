@@ -4,8 +4,8 @@
 //! ([`super::decimate::DecimatedPath`]) that has just reached `window_m` of counted path. Windows follow each
 //! other without overlap by default; with an overlap fraction β the next window starts at the first
 //! vertex (1 − β)·w of path after the previous start. The trailing partial window (less than w of path
-//! left) is dropped silently. A window that overlaps a blocked interval (a reference gap longer than
-//! Δt_max, an estimate gap, time not covered by the estimate) is dropped and counted, and the next window
+//! left) is dropped silently, and so are windows outside the estimate's time span. A window that overlaps a
+//! blocked interval (a reference or estimate gap longer than Δt_max) is dropped and counted, and the next window
 //! starts at the first vertex after that interval: there is no trusted path across it.
 
 use super::decimate::DecimatedPath;
@@ -43,11 +43,13 @@ pub fn gaps(times: &[f64], dt_max_s: f64) -> Vec<[f64; 2]> {
 }
 
 /// Lays out windows of `window_m` metres of path on `path` with overlap fraction `overlap` in [0, 1).
-/// `blocked` are sorted time intervals no window may overlap.
+/// Windows lie inside the time `span` (the first starts at the first vertex at or after `span[0]`;
+/// none is counted dropped for the span). `blocked` are sorted time intervals no window may overlap.
 pub fn path_windows(
     path: &DecimatedPath<'_>,
     window_m: f64,
     overlap: f64,
+    span: [f64; 2],
     blocked: &[[f64; 2]],
 ) -> Result<WindowLayout> {
     if !(window_m.is_finite() && window_m > 0.0) {
@@ -63,11 +65,11 @@ pub fn path_windows(
     let (t, s) = (&path.t, &path.s);
     let m = t.len();
     let mut layout = WindowLayout::default();
-    let mut start = 0;
+    let mut start = t.partition_point(|&x| x < span[0]);
     while start + 1 < m {
         let target = s[start] + window_m;
         let end = start + 1 + s[start + 1..].partition_point(|&x| x < target);
-        if end >= m {
+        if end >= m || t[end] > span[1] {
             break; // the trailing partial window
         }
         let (t0, t1) = (t[start], t[end]);
@@ -76,7 +78,9 @@ pub fn path_windows(
             .iter()
             .filter(|b| b[0] < t1 && b[1] > t0)
             .map(|b| b[1])
-            .fold(None, |acc: Option<f64>, e| Some(acc.map_or(e, |a| a.max(e))));
+            .fold(None, |acc: Option<f64>, e| {
+                Some(acc.map_or(e, |a| a.max(e)))
+            });
         if let Some(resume) = hit {
             layout.dropped += 1;
             let next = t.partition_point(|&x| x < resume);
@@ -101,6 +105,8 @@ mod tests {
     use super::*;
     use nalgebra::Vector3;
 
+    const ALL: [f64; 2] = [f64::NEG_INFINITY, f64::INFINITY];
+
     fn line(n: usize) -> (Vec<f64>, Vec<Vector3<f64>>) {
         (0..n)
             .map(|i| (i as f64, Vector3::new(i as f64, 0.0, 0.0)))
@@ -111,7 +117,7 @@ mod tests {
     fn disjoint_windows_drop_the_tail() {
         let (t, p) = line(23); // 22 m
         let path = DecimatedPath::new(&t, &p, 0.5, &[]);
-        let l = path_windows(&path, 5.0, 0.0, &[]).unwrap();
+        let l = path_windows(&path, 5.0, 0.0, ALL, &[]).unwrap();
         let spans: Vec<_> = l.windows.iter().map(|w| (w.start, w.end)).collect();
         assert_eq!(spans, vec![(0, 5), (5, 10), (10, 15), (15, 20)]);
         assert_eq!(l.dropped, 0);
@@ -121,13 +127,16 @@ mod tests {
     fn overlap_and_gaps() {
         let (t, p) = line(23);
         let path = DecimatedPath::new(&t, &p, 0.5, &[]);
-        let l = path_windows(&path, 5.0, 0.6, &[]).unwrap();
+        let l = path_windows(&path, 5.0, 0.6, ALL, &[]).unwrap();
         assert_eq!(l.windows[1].start, 2);
-        let l = path_windows(&path, 5.0, 0.0, &[[7.0, 8.0]]).unwrap();
+        let l = path_windows(&path, 5.0, 0.0, ALL, &[[7.0, 8.0]]).unwrap();
         let spans: Vec<_> = l.windows.iter().map(|w| (w.start, w.end)).collect();
         assert_eq!(spans, vec![(0, 5), (8, 13), (13, 18)]);
         assert_eq!(l.dropped, 1);
-        assert!(path_windows(&path, 5.0, 1.0, &[]).is_err());
-        assert!(path_windows(&path, 0.0, 0.0, &[]).is_err());
+        let l = path_windows(&path, 5.0, 0.0, [1.5, 17.0], &[]).unwrap();
+        let spans: Vec<_> = l.windows.iter().map(|w| (w.start, w.end)).collect();
+        assert_eq!(spans, vec![(2, 7), (7, 12), (12, 17)]);
+        assert!(path_windows(&path, 5.0, 1.0, ALL, &[]).is_err());
+        assert!(path_windows(&path, 0.0, 0.0, ALL, &[]).is_err());
     }
 }
