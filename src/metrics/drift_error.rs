@@ -38,9 +38,22 @@ pub struct DriftParams {
     pub lever_arm_m: f64,
     /// Curvature (eq. 1) parameters for the radii of the lever-arm correction (default ε_min 0.5 m).
     pub curvature: CurvatureParams,
-    /// Rotation-in-place detection.
-    pub rotation_in_place: RotationInPlaceParams,
 }
+
+impl DriftParams {
+    /// The rotation-in-place detector's parameters: a standstill lasts at least Δt_max (the paper's
+    /// "no ε-chord within Δt_max"), inside a ball of [`STILL_RADIUS_M`].
+    pub fn rotation_in_place(&self) -> RotationInPlaceParams {
+        RotationInPlaceParams {
+            still_radius_m: STILL_RADIUS_M,
+            min_still_s: self.dt_max_s,
+        }
+    }
+}
+
+/// Radius within which the reference counts as standing still, metres: well above GNSS-RTK or
+/// motion-capture noise (≤ 3 cm), well below any lever arm worth correcting for.
+pub const STILL_RADIUS_M: f64 = 0.15;
 
 impl Default for DriftParams {
     fn default() -> Self {
@@ -55,7 +68,6 @@ impl Default for DriftParams {
                 eps_m: 0.5,
                 ..CurvatureParams::default()
             },
-            rotation_in_place: RotationInPlaceParams::default(),
         }
     }
 }
@@ -138,7 +150,7 @@ pub fn drift_error_windows(
         });
     }
 
-    let excluded = rotations_in_place(ref_t, ref_p, est_t, est_p, &params.rotation_in_place);
+    let excluded = rotations_in_place(ref_t, ref_p, est_t, est_p, &params.rotation_in_place());
     let ref_path = DecimatedPath::new(ref_t, ref_p, params.path_eps_m, &excluded);
     let est_path = DecimatedPath::new(est_t, est_p, params.path_eps_m, &excluded);
 
@@ -261,11 +273,6 @@ fn check_params(p: &DriftParams) -> Result<()> {
             "lever arm {} m: must be a non-negative number of metres",
             p.lever_arm_m
         )));
-    }
-    if !positive(p.rotation_in_place.still_radius_m) || !positive(p.rotation_in_place.min_still_s) {
-        return Err(Error::InvalidArgument(
-            "rotation-in-place still radius and duration must be positive".into(),
-        ));
     }
     Ok(())
 }
