@@ -1,1 +1,8 @@
 //! Metrics: Drift Error (the paper) and, later, the standard APE/RPE.
+
+pub mod decimate;
+pub mod drift_error;
+pub mod lever;
+pub mod rotation_in_place;
+pub mod stats;
+pub mod windows;

@@ -1,0 +1,100 @@
+//! Summary statistics of a metric's per-window (or per-pose) values, in the style evo prints them, so
+//! that a number from trajdrift can be put next to one from evo without a footnote.
+//!
+//! Quantiles use linear interpolation between closest ranks (numpy's default `method="linear"`), and
+//! `std` is the population standard deviation (numpy's default `ddof=0`, which evo uses). Hand-written:
+//! ten lines of arithmetic do not justify a statistics crate.
+
+/// The statistics of a set of values.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Summary {
+    /// Root mean square.
+    pub rmse: f64,
+    /// Arithmetic mean.
+    pub mean: f64,
+    /// 50 % quantile.
+    pub median: f64,
+    /// Population standard deviation.
+    pub std: f64,
+    /// 25 % quantile.
+    pub q1: f64,
+    /// 75 % quantile.
+    pub q3: f64,
+    /// 95 % quantile.
+    pub p95: f64,
+    /// Smallest value.
+    pub min: f64,
+    /// Largest value.
+    pub max: f64,
+    /// Number of values.
+    pub n: usize,
+}
+
+/// Summarizes `values`, ignoring non-finite ones. `None` when no finite value is left.
+///
+/// ```
+/// use trajdrift::metrics::stats::summarize;
+/// let s = summarize(&[1.0, 2.0, 3.0, 4.0]).unwrap();
+/// assert_eq!(s.median, 2.5);
+/// assert_eq!(s.q1, 1.75); // numpy.quantile([1, 2, 3, 4], 0.25)
+/// ```
+pub fn summarize(values: &[f64]) -> Option<Summary> {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    let nf = n as f64;
+    let mean = v.iter().sum::<f64>() / nf;
+    let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / nf;
+    let rmse = (v.iter().map(|x| x * x).sum::<f64>() / nf).sqrt();
+    Some(Summary {
+        rmse,
+        mean,
+        median: quantile_sorted(&v, 0.5),
+        std: var.sqrt(),
+        q1: quantile_sorted(&v, 0.25),
+        q3: quantile_sorted(&v, 0.75),
+        p95: quantile_sorted(&v, 0.95),
+        min: v[0],
+        max: v[n - 1],
+        n,
+    })
+}
+
+/// The `q` quantile (0 ≤ q ≤ 1) of sorted, non-empty `v`, linear between closest ranks (numpy default).
+fn quantile_sorted(v: &[f64], q: f64) -> f64 {
+    let h = (v.len() - 1) as f64 * q.clamp(0.0, 1.0);
+    let lo = h.floor() as usize;
+    let hi = (lo + 1).min(v.len() - 1);
+    v[lo] + (h - lo as f64) * (v[hi] - v[lo])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn matches_numpy() {
+        // numpy: x = [3, 1, 4, 1, 5, 9, 2, 6]; np.quantile(x, [.25, .5, .75, .95]) = 1.75, 3.5, 5.25, 7.95
+        let s = summarize(&[3.0, 1.0, 4.0, 1.0, 5.0, 9.0, 2.0, 6.0]).unwrap();
+        assert!((s.q1 - 1.75).abs() < 1e-12);
+        assert!((s.median - 3.5).abs() < 1e-12);
+        assert!((s.q3 - 5.25).abs() < 1e-12);
+        assert!((s.p95 - 7.95).abs() < 1e-12);
+        assert!((s.mean - 3.875).abs() < 1e-12);
+        // np.std(x) = 2.5708704751503917, sqrt(mean(x²)) = sqrt(173/8)
+        assert!((s.std - 2.5708704751503917).abs() < 1e-12);
+        assert!((s.rmse - (173.0f64 / 8.0).sqrt()).abs() < 1e-12);
+        assert_eq!((s.min, s.max, s.n), (1.0, 9.0, 8));
+    }
+
+    #[test]
+    fn empty_and_non_finite() {
+        assert!(summarize(&[]).is_none());
+        assert!(summarize(&[f64::NAN]).is_none());
+        let s = summarize(&[f64::NAN, 2.0]).unwrap();
+        assert_eq!((s.median, s.n), (2.0, 1));
+    }
+}
