@@ -8,7 +8,7 @@ use rayon::prelude::*;
 
 use crate::align::time_offset::{estimate_time_offset, OffsetEstimate, OffsetMethod, OffsetStatus};
 use crate::error::{Error, Result};
-use crate::metrics::drift_error::{drift_error, DriftErrorResult};
+use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult};
 use crate::report::json::{
     DriftErrorReport, EstimateReport, Input, OffsetMethodReport, Parameters, Report, TimeOffsetReport, TopicReport,
     Tool, WindowReport, SCHEMA_VERSION,
@@ -103,6 +103,13 @@ fn require_samples(path: &str, t: &Loaded) -> Result<()> {
     Ok(())
 }
 
+fn status_str(s: OffsetStatus) -> &'static str {
+    match s {
+        OffsetStatus::Ok => "ok",
+        OffsetStatus::Weak => "weak",
+    }
+}
+
 fn method_report(method: OffsetMethod, r: &Result<OffsetEstimate>) -> OffsetMethodReport {
     match r {
         Ok(o) => OffsetMethodReport {
@@ -110,7 +117,7 @@ fn method_report(method: OffsetMethod, r: &Result<OffsetEstimate>) -> OffsetMeth
             offset_s: Some(o.offset_s),
             correlation: Some(o.correlation),
             confidence: Some(o.confidence),
-            status: o.status.as_str().into(),
+            status: status_str(o.status).into(),
             error: None,
         },
         Err(e) => OffsetMethodReport {
@@ -211,12 +218,12 @@ fn evaluate_estimate(
         });
     }
     let t0_s = t0_ns as f64 * 1e-9;
-    let mut drift = Vec::with_capacity(config.windows_m.len());
-    for &w in &config.windows_m {
-        let r = drift_error(&ref_t, ref_p, &aligned_t, &aligned.positions, &config.drift_params(w))
-            .map_err(|e| relabel(e, &est.label))?;
-        drift.push(drift_report(&r, t0_s));
-    }
+    let params = config.drift_params(config.windows_m[0]);
+    let drift = drift_error_windows(&ref_t, ref_p, &aligned_t, &aligned.positions, &params, &config.windows_m)
+        .map_err(|e| relabel(e, &est.label))?
+        .iter()
+        .map(|r| drift_report(r, t0_s))
+        .collect();
     Ok((
         EstimateReport {
             name: est.name.clone(),

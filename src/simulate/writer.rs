@@ -33,7 +33,7 @@ pub fn write_mcap<W: Write + Seek>(out: W, mission: &Mission, bulk_bytes: usize)
         .compression(Some(mcap::Compression::Zstd))
         .create(out)
         .map_err(mcap_err)?;
-    let mut channel = |w: &mut mcap::Writer<W>, topic: &str, ty: &str| -> Result<u16> {
+    let channel = |w: &mut mcap::Writer<W>, topic: &str, ty: &str| -> Result<u16> {
         let text = schema_text(ty).ok_or_else(|| Error::InvalidArgument(format!("no schema text for {ty}")))?;
         let schema = w.add_schema(ty, "ros2msg", text.as_bytes()).map_err(mcap_err)?;
         w.add_channel(schema, topic, "cdr", &BTreeMap::new()).map_err(mcap_err)
