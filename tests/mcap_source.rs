@@ -303,7 +303,7 @@ fn truncated_recording_warns_and_keeps_what_was_read() {
         assert!(ex.warnings[0].message.contains(&path.display().to_string()));
         let got = &ex.topics[0].trajectory;
         assert!(
-            got.len() > 0 && got.len() < n_full,
+            !got.is_empty() && got.len() < n_full,
             "{} of {n_full}",
             got.len()
         );
@@ -487,22 +487,22 @@ fn every_layout_reads_the_same() {
             assert_eq!(p.trajectory, again.trajectory);
             assert_eq!(p.trajectory.positions, q.trajectory.positions);
             assert_eq!(p.trajectory.stamps_ns[1], pose(1).header.stamp.to_ns());
-            assert_eq!(p.trajectory.positions[7].x, 0.7000000000000001);
+            assert_eq!(p.trajectory.positions[7].x, 7.0 * 0.1);
             assert_eq!((f.messages, f.invalid_dropped), (n as u64, 2));
             assert_eq!(f.trajectory.len(), n as usize - 2);
             // Default origin = the first valid fix.
             assert_eq!(f.geodetic_origin, Some([46.78, -71.27, 50.0]));
-            let topics = source.topics().unwrap();
-            assert_eq!(topics.len(), 5);
+            let listed = source.topics().unwrap();
+            assert_eq!(listed.len(), 5);
             assert!(
-                topics.iter().all(|t| t.message_count == n as u64),
-                "{topics:?}"
+                listed.iter().all(|t| t.message_count == n as u64),
+                "{listed:?}"
             );
-            let readable: Vec<bool> = topics.iter().map(|t| t.readable).collect();
+            let readable: Vec<bool> = listed.iter().map(|t| t.readable).collect();
             assert_eq!(readable, [true, true, true, false, false]);
             // The JSON-encoded channel has a supported schema but cannot be decoded.
             let err = source
-                .extract(&topics_of(&["/json_pose"]), &Default::default(), &|_| {})
+                .extract(&topics(&["/json_pose"]), &Default::default(), &|_| {})
                 .unwrap_err();
             assert!(
                 matches!(&err, Error::UnsupportedType { type_name, .. } if type_name.contains("json")),
@@ -516,10 +516,6 @@ fn every_layout_reads_the_same() {
             assert_eq!(a.trajectory, b.trajectory);
         }
     }
-}
-
-fn topics_of(names: &[&str]) -> Vec<String> {
-    topics(names)
 }
 
 #[test]
