@@ -108,7 +108,7 @@ pub fn curvature_signature(
         let b = positions[k] - pi;
         let (s1, s2) = (a.norm(), b.norm());
         let turn = turning_angle(&a, &b);
-        if !(turn <= params.theta_max_rad) {
+        if turn.is_nan() || turn > params.theta_max_rad {
             continue;
         }
         out.push(CurvatureSample {

@@ -79,7 +79,7 @@ pub fn resample_on_grid(
         values: vec![0.0; len],
         mask: vec![0.0; len],
     };
-    if samples.is_empty() || !(step > 0.0) {
+    if samples.is_empty() || step.is_nan() || step <= 0.0 {
         return out;
     }
     // Grid times rise monotonically, so one cursor walks the samples once.

@@ -37,7 +37,7 @@ pub fn speed_profile(
         .collect();
     let n = idx.len();
     let mut out = Vec::new();
-    if n < 2 || !(window_s > 0.0) {
+    if n < 2 || window_s.is_nan() || window_s <= 0.0 {
         return out;
     }
     let t = |k: usize| times[idx[k]];

@@ -296,7 +296,7 @@ fn peak_separation(ncc: &[f64], eligible: &[usize], i_peak: usize, step: f64) ->
     let median = vals[vals.len() / 2];
     let rho = ncc[i_peak];
     let prominence = rho - median;
-    if !(prominence > 0.0) {
+    if prominence.is_nan() || prominence <= 0.0 {
         return (0.0, 0.0);
     }
     let half = median + 0.5 * prominence;
@@ -350,17 +350,19 @@ fn fine_sums(
         let len = ((e1 - start + 1) as usize).min(FINE_BLOCK);
         let e: RegularSignal = resample_on_grid(et, ev, hf, start, len, gap);
         let r = resample_on_grid(rt, rv, hf, start + lo, len + lags - 1, gap);
+        // Masked values are 0, so every overlap sum is a plain dot product (vectorises well).
+        let ea2: Vec<f64> = e.values.iter().map(|v| v * v).collect();
+        let rb2: Vec<f64> = r.values.iter().map(|v| v * v).collect();
         for (l, s) in sums.iter_mut().enumerate() {
+            let (rv, rm, rb2) = (&r.values[l..l + len], &r.mask[l..l + len], &rb2[l..l + len]);
             for j in 0..len {
-                if e.mask[j] > 0.5 && r.mask[j + l] > 0.5 {
-                    let (x, y) = (e.values[j], r.values[j + l]);
-                    s.n += 1.0;
-                    s.sa += x;
-                    s.sb += y;
-                    s.sab += x * y;
-                    s.saa += x * x;
-                    s.sbb += y * y;
-                }
+                let (x, mx, y, my) = (e.values[j], e.mask[j], rv[j], rm[j]);
+                s.n += mx * my;
+                s.sa += x * my;
+                s.sb += mx * y;
+                s.sab += x * y;
+                s.saa += ea2[j] * my;
+                s.sbb += mx * rb2[j];
             }
         }
         start += len as i64;

@@ -119,8 +119,10 @@ pub fn masked_ncc(
     if na == 0 || nb == 0 || lags == 0 {
         return out;
     }
-    // Only lags with a possible overlap need the FFT: k in (−na, nb).
-    let len = (na + nb).next_power_of_two();
+    // Circular correlation equals the linear one at every |k| ≤ K once len ≥ max(na, nb) + K (no
+    // product wraps around onto a non-zero sample); lags beyond (−na, nb) have no overlap anyway.
+    let k_abs = lag_min.unsigned_abs().max(lag_max.unsigned_abs()) as usize;
+    let len = (na.max(nb) + k_abs.min(na.max(nb))).next_power_of_two();
     let mut planner = FftPlanner::<f64>::new();
     let fwd = planner.plan_fft_forward(len);
     let inv = planner.plan_fft_inverse(len);
