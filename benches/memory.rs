@@ -14,7 +14,10 @@ use trajdrift::simulate::writer::write_mcap;
 use trajdrift::simulate::{default_route, simulate, MissionConfig};
 
 fn main() {
-    let mib: u64 = std::env::var("TRAJDRIFT_BENCH_MIB").ok().and_then(|s| s.parse().ok()).unwrap_or(1100);
+    let mib: u64 = std::env::var("TRAJDRIFT_BENCH_MIB")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1100);
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/bench-data");
     std::fs::create_dir_all(&dir).expect("create target/bench-data");
     let path = dir.join(format!("bulk-{mib}mib.mcap"));
@@ -22,7 +25,8 @@ fn main() {
     if !path.exists() {
         let bulk = (mib as f64 * 1024.0 * 1024.0 / (mission.duration_s * 10.0)) as usize;
         let tmp = path.with_extension("tmp");
-        let f = std::io::BufWriter::new(std::fs::File::create(&tmp).expect("create bench recording"));
+        let f =
+            std::io::BufWriter::new(std::fs::File::create(&tmp).expect("create bench recording"));
         write_mcap(f, &mission, bulk).expect("write bench recording");
         std::fs::rename(&tmp, &path).expect("rename bench recording");
     }
@@ -31,7 +35,13 @@ fn main() {
     let status = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
         .args(["eval", "--quiet", "--platform", "wheeled"])
         .arg(&path)
-        .args(["--reference", "/reference/position", "--estimate", "/estimate/odom", "--json"])
+        .args([
+            "--reference",
+            "/reference/position",
+            "--estimate",
+            "/estimate/odom",
+            "--json",
+        ])
         .arg(dir.join("bulk-report.json"))
         .status()
         .expect("run trajdrift eval");
@@ -52,6 +62,12 @@ fn main() {
         secs,
         size as f64 / 1048576.0 / secs
     );
-    assert!(status.code().is_some_and(|c| c == 0 || c == 3), "eval failed");
-    assert!((peak as f64) < 0.05 * size as f64, "peak RSS above 5 % of the file size");
+    assert!(
+        status.code().is_some_and(|c| c == 0 || c == 3),
+        "eval failed"
+    );
+    assert!(
+        (peak as f64) < 0.05 * size as f64,
+        "peak RSS above 5 % of the file size"
+    );
 }

@@ -13,7 +13,13 @@ fn main() {
     let shared = std::env::var("TRAJDRIFT_SHARED")
         .map(PathBuf::from)
         .unwrap_or_else(|_| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"));
-    for m in ["lever_arm", "gnss_outages", "legged", "legged_spins", "straight"] {
+    for m in [
+        "lever_arm",
+        "gnss_outages",
+        "legged",
+        "legged_spins",
+        "straight",
+    ] {
         let rec = shared.join("fixtures").join(m).join("mission.mcap");
         if !rec.exists() {
             eprintln!("speed: {} missing, skipped", rec.display());
@@ -33,6 +39,9 @@ fn main() {
                 eprintln!("speed: {m}: {e}");
             }
         }
-        println!("speed: {m:<13} {:8.1} ms per eval", start.elapsed().as_secs_f64() * 1e3 / reps as f64);
+        println!(
+            "speed: {m:<13} {:8.1} ms per eval",
+            start.elapsed().as_secs_f64() * 1e3 / reps as f64
+        );
     }
 }

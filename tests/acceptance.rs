@@ -34,10 +34,21 @@ fn sample_counts_equal_the_truth() {
     let Some(shared) = shared() else { return };
     for m in MISSIONS {
         let t = truth(&shared, m);
-        for (r, e) in [("/reference/position", "/estimate/odom"), ("/reference/fix", "/estimate/pose")] {
+        for (r, e) in [
+            ("/reference/position", "/estimate/odom"),
+            ("/reference/fix", "/estimate/pose"),
+        ] {
             let rep = eval(&mission(&shared, m), r, e, OffsetMethod::Speed);
-            assert_eq!(rep.reference.samples as u64, t["topics"][r]["count"].as_u64().unwrap(), "{m} {r}");
-            assert_eq!(rep.estimates[0].samples as u64, t["topics"][e]["count"].as_u64().unwrap(), "{m} {e}");
+            assert_eq!(
+                rep.reference.samples as u64,
+                t["topics"][r]["count"].as_u64().unwrap(),
+                "{m} {r}"
+            );
+            assert_eq!(
+                rep.estimates[0].samples as u64,
+                t["topics"][e]["count"].as_u64().unwrap(),
+                "{m} {e}"
+            );
         }
     }
 }
@@ -47,14 +58,26 @@ fn speed_offset_within_20_ms_and_de_median_within_half_a_point() {
     let Some(shared) = shared() else { return };
     for m in MISSIONS {
         let t = truth(&shared, m);
-        let rep = eval(&mission(&shared, m), "/reference/position", "/estimate/odom", OffsetMethod::Speed);
+        let rep = eval(
+            &mission(&shared, m),
+            "/reference/position",
+            "/estimate/odom",
+            OffsetMethod::Speed,
+        );
         let o = &rep.estimates[0].time_offset;
         let dt_true = t["time_offset"]["dt_true_s"].as_f64().unwrap();
-        assert!((o.offset_s - dt_true).abs() < 0.020, "{m}: speed Δt {} vs {dt_true}", o.offset_s);
+        assert!(
+            (o.offset_s - dt_true).abs() < 0.020,
+            "{m}: speed Δt {} vs {dt_true}",
+            o.offset_s
+        );
         if m != "legged_spins" {
             let scale = t["estimate_model"]["scale_error"].as_f64().unwrap();
             let median = rep.estimates[0].drift_error[0].median.unwrap();
-            assert!((median - scale).abs() < 0.005, "{m}: DE median {median} vs {scale}");
+            assert!(
+                (median - scale).abs() < 0.005,
+                "{m}: DE median {median} vs {scale}"
+            );
         }
     }
 }
@@ -63,11 +86,19 @@ fn speed_offset_within_20_ms_and_de_median_within_half_a_point() {
 fn rotation_in_place_is_excluded_on_legged_spins() {
     let Some(shared) = shared() else { return };
     let t = truth(&shared, "legged_spins");
-    let rep = eval(&mission(&shared, "legged_spins"), "/reference/position", "/estimate/odom", OffsetMethod::Speed);
+    let rep = eval(
+        &mission(&shared, "legged_spins"),
+        "/reference/position",
+        "/estimate/odom",
+        OffsetMethod::Speed,
+    );
     let start = t["start_time_ns"].as_i64().unwrap() as f64 * 1e-9;
     let excluded = &rep.estimates[0].drift_error[0].excluded_intervals;
     for spin in t["spins"]["intervals"].as_array().unwrap() {
-        let (a, b) = (start + spin["t_start"].as_f64().unwrap(), start + spin["t_end"].as_f64().unwrap());
+        let (a, b) = (
+            start + spin["t_start"].as_f64().unwrap(),
+            start + spin["t_end"].as_f64().unwrap(),
+        );
         assert!(
             excluded.iter().any(|iv| iv[0] <= a && b <= iv[1]),
             "spin [{a}, {b}] not inside any excluded interval {excluded:?}"
@@ -96,20 +127,35 @@ fn rigid_transform_of_the_estimate_changes_nothing() {
         evaluate(&c, &|_| {}).unwrap()
     };
     // Random yaw and translation (fixed seeds keep the test reproducible).
-    for (k, (yaw, tx, ty, tz)) in [(2.1, 350.0, -1200.0, 4.0), (-0.7, -9.5, 77.0, -30.0), (3.0, 1e4, 2e4, 0.0)]
-        .into_iter()
-        .enumerate()
+    for (k, (yaw, tx, ty, tz)) in [
+        (2.1, 350.0, -1200.0, 4.0),
+        (-0.7, -9.5, 77.0, -30.0),
+        (3.0, 1e4, 2e4, 0.0),
+    ]
+    .into_iter()
+    .enumerate()
     {
-        let moved = est.transformed(&UnitQuaternion::from_euler_angles(0.0, 0.0, yaw), &Vector3::new(tx, ty, tz));
+        let moved = est.transformed(
+            &UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
+            &Vector3::new(tx, ty, tz),
+        );
         let path = tmp.path().join(format!("moved{k}.tum"));
         write_tum(std::fs::File::create(&path).unwrap(), &moved).unwrap();
         for method in [OffsetMethod::Curvature, OffsetMethod::Speed] {
             let (a, b) = (run(&dir.join("estimate.tum"), method), run(&path, method));
             let (ea, eb) = (&a.estimates[0], &b.estimates[0]);
-            assert!((ea.time_offset.offset_s - eb.time_offset.offset_s).abs() < 1e-6, "{method:?} Δt");
+            assert!(
+                (ea.time_offset.offset_s - eb.time_offset.offset_s).abs() < 1e-6,
+                "{method:?} Δt"
+            );
             for (da, db) in ea.drift_error.iter().zip(&eb.drift_error) {
                 for (wa, wb) in da.per_window.iter().zip(&db.per_window) {
-                    assert!((wa.de - wb.de).abs() < 1e-6, "{method:?} DE {} vs {}", wa.de, wb.de);
+                    assert!(
+                        (wa.de - wb.de).abs() < 1e-6,
+                        "{method:?} DE {} vs {}",
+                        wa.de,
+                        wb.de
+                    );
                 }
                 assert_eq!(da.windows, db.windows);
             }

@@ -24,9 +24,22 @@ fn stderr(o: &Output) -> String {
 fn recording(dir: &Path) -> PathBuf {
     let mission = simulate(&MissionConfig::default(), &default_route());
     let path = dir.join("mission.mcap");
-    write_mcap(std::io::BufWriter::new(std::fs::File::create(&path).unwrap()), &mission, 256).unwrap();
-    write_tum(std::fs::File::create(dir.join("reference.tum")).unwrap(), &mission.reference).unwrap();
-    write_tum(std::fs::File::create(dir.join("estimate.tum")).unwrap(), &mission.estimate).unwrap();
+    write_mcap(
+        std::io::BufWriter::new(std::fs::File::create(&path).unwrap()),
+        &mission,
+        256,
+    )
+    .unwrap();
+    write_tum(
+        std::fs::File::create(dir.join("reference.tum")).unwrap(),
+        &mission.reference,
+    )
+    .unwrap();
+    write_tum(
+        std::fs::File::create(dir.join("estimate.tum")).unwrap(),
+        &mission.estimate,
+    )
+    .unwrap();
     path
 }
 
@@ -40,16 +53,41 @@ fn eval_prints_a_table_and_writes_json() {
     let rec = recording(dir.path());
     let json = dir.path().join("out.json");
     let o = run(&[
-        "eval", s(&rec), "--reference", "/reference/position", "--estimate", "lio=/estimate/odom",
-        "--platform", "wheeled", "--window", "1,5,10", "--offset-method", "speed", "--json", s(&json),
+        "eval",
+        s(&rec),
+        "--reference",
+        "/reference/position",
+        "--estimate",
+        "lio=/estimate/odom",
+        "--platform",
+        "wheeled",
+        "--window",
+        "1,5,10",
+        "--offset-method",
+        "speed",
+        "--json",
+        s(&json),
     ]);
-    assert!(o.status.code() == Some(0) || o.status.code() == Some(3), "{}", stderr(&o));
+    assert!(
+        o.status.code() == Some(0) || o.status.code() == Some(3),
+        "{}",
+        stderr(&o)
+    );
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("estimate lio"), "{out}");
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(report["schema_version"], 1);
-    assert_eq!(report["estimates"][0]["drift_error"].as_array().unwrap().len(), 3);
-    let dt = report["estimates"][0]["time_offset"]["offset_s"].as_f64().unwrap();
+    assert_eq!(
+        report["estimates"][0]["drift_error"]
+            .as_array()
+            .unwrap()
+            .len(),
+        3
+    );
+    let dt = report["estimates"][0]["time_offset"]["offset_s"]
+        .as_f64()
+        .unwrap();
     assert!((dt - 0.2).abs() < 0.03, "speed offset {dt}");
     assert_eq!(report["parameters"]["path_eps_m"], 0.3);
 }
@@ -59,8 +97,20 @@ fn negative_numbers_are_values() {
     let dir = tempfile::tempdir().unwrap();
     let rec = recording(dir.path());
     let o = run(&[
-        "eval", s(&rec), "--reference", "/reference/position", "--estimate", "/estimate/odom",
-        "--time-offset", "-0.35", "--origin", "-33.9,151.2,40", "--t-start", "-5", "--json", "-",
+        "eval",
+        s(&rec),
+        "--reference",
+        "/reference/position",
+        "--estimate",
+        "/estimate/odom",
+        "--time-offset",
+        "-0.35",
+        "--origin",
+        "-33.9,151.2,40",
+        "--t-start",
+        "-5",
+        "--json",
+        "-",
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -72,10 +122,20 @@ fn negative_numbers_are_values() {
 fn missing_topic_lists_the_topics_present() {
     let dir = tempfile::tempdir().unwrap();
     let rec = recording(dir.path());
-    let o = run(&["eval", s(&rec), "--reference", "/nope", "--estimate", "/estimate/odom"]);
+    let o = run(&[
+        "eval",
+        s(&rec),
+        "--reference",
+        "/nope",
+        "--estimate",
+        "/estimate/odom",
+    ]);
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
-    assert!(e.contains("/nope") && e.contains("/reference/position") && e.contains("mission.mcap"), "{e}");
+    assert!(
+        e.contains("/nope") && e.contains("/reference/position") && e.contains("mission.mcap"),
+        "{e}"
+    );
     assert_eq!(e.trim().lines().count(), 1, "{e}");
 }
 
@@ -83,10 +143,20 @@ fn missing_topic_lists_the_topics_present() {
 fn unsupported_type_lists_the_supported_ones() {
     let dir = tempfile::tempdir().unwrap();
     let rec = recording(dir.path());
-    let o = run(&["eval", s(&rec), "--reference", "/reference/position", "--estimate", "/camera/raw"]);
+    let o = run(&[
+        "eval",
+        s(&rec),
+        "--reference",
+        "/reference/position",
+        "--estimate",
+        "/camera/raw",
+    ]);
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
-    assert!(e.contains("sensor_msgs/msg/Image") && e.contains("nav_msgs/msg/Odometry"), "{e}");
+    assert!(
+        e.contains("sensor_msgs/msg/Image") && e.contains("nav_msgs/msg/Odometry"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -94,10 +164,24 @@ fn too_few_samples() {
     let dir = tempfile::tempdir().unwrap();
     recording(dir.path());
     let short = dir.path().join("short.tum");
-    std::fs::write(&short, "1718460000.0 0 0 0 0 0 0 1\n1718460001.0 1 0 0 0 0 0 1\n").unwrap();
-    let o = run(&["eval", "--reference-file", s(&dir.path().join("reference.tum")), "--estimate-file", s(&short)]);
+    std::fs::write(
+        &short,
+        "1718460000.0 0 0 0 0 0 0 1\n1718460001.0 1 0 0 0 0 0 1\n",
+    )
+    .unwrap();
+    let o = run(&[
+        "eval",
+        "--reference-file",
+        s(&dir.path().join("reference.tum")),
+        "--estimate-file",
+        s(&short),
+    ]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("only 2 usable samples"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("only 2 usable samples"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]
@@ -105,8 +189,16 @@ fn no_time_overlap() {
     let dir = tempfile::tempdir().unwrap();
     let mission = simulate(&MissionConfig::default(), &default_route());
     let late = mission.estimate.shifted(3_600_000_000_000);
-    write_tum(std::fs::File::create(dir.path().join("r.tum")).unwrap(), &mission.reference).unwrap();
-    write_tum(std::fs::File::create(dir.path().join("e.tum")).unwrap(), &late).unwrap();
+    write_tum(
+        std::fs::File::create(dir.path().join("r.tum")).unwrap(),
+        &mission.reference,
+    )
+    .unwrap();
+    write_tum(
+        std::fs::File::create(dir.path().join("e.tum")).unwrap(),
+        &late,
+    )
+    .unwrap();
     for extra in [&[][..], &["--time-offset", "0"][..]] {
         let mut args = vec!["eval", "--reference-file"];
         let (r, e) = (dir.path().join("r.tum"), dir.path().join("e.tum"));
@@ -139,15 +231,27 @@ fn truncated_recording_is_read_with_a_warning() {
     let cut = dir.path().join("cut.mcap");
     std::fs::write(&cut, &bytes[..bytes.len() * 7 / 10]).unwrap();
     let o = run(&[
-        "eval", s(&cut), "--reference", "/reference/position", "--estimate", "/estimate/odom",
-        "--time-offset", "0.2", "--json", "-",
+        "eval",
+        s(&cut),
+        "--reference",
+        "/reference/position",
+        "--estimate",
+        "/estimate/odom",
+        "--time-offset",
+        "0.2",
+        "--json",
+        "-",
     ]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     assert!(stderr(&o).contains("truncated"), "{}", stderr(&o));
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let n = report["reference"]["samples"].as_u64().unwrap();
     assert!(n > 100 && n < 1500, "{n}");
-    assert_eq!(std::fs::read(&rec).unwrap(), bytes, "the input is never modified");
+    assert_eq!(
+        std::fs::read(&rec).unwrap(),
+        bytes,
+        "the input is never modified"
+    );
 }
 
 #[test]
@@ -157,10 +261,18 @@ fn topics_lists_channels() {
     let o = run(&["topics", s(&rec)]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("/reference/position") && out.contains("/camera/raw"), "{out}");
+    assert!(
+        out.contains("/reference/position") && out.contains("/camera/raw"),
+        "{out}"
+    );
     let o = run(&["topics", s(&rec), "--json", "-"]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let odom = v.as_array().unwrap().iter().find(|t| t["topic"] == "/estimate/odom").unwrap();
+    let odom = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["topic"] == "/estimate/odom")
+        .unwrap();
     assert_eq!(odom["readable"], true);
     assert!(odom["message_count"].as_u64().unwrap() > 2000);
 }
@@ -175,18 +287,44 @@ fn usage_errors_exit_2() {
 fn weak_offset_exits_3_and_still_writes_json() {
     // A straight line at constant speed: neither curvature nor speed can tell the offset.
     let dir = tempfile::tempdir().unwrap();
-    let route = [trajdrift::simulate::motion::Segment { duration_s: 60.0, speed_mps: 1.5, curvature: 0.0 }];
-    let cfg = MissionConfig { ref_noise_m: 0.0, est_noise_m: 0.0, ..MissionConfig::default() };
+    let route = [trajdrift::simulate::motion::Segment {
+        duration_s: 60.0,
+        speed_mps: 1.5,
+        curvature: 0.0,
+    }];
+    let cfg = MissionConfig {
+        ref_noise_m: 0.0,
+        est_noise_m: 0.0,
+        ..MissionConfig::default()
+    };
     let mission = simulate(&cfg, &route);
     let mut reference = mission.reference.clone();
     reference.crop(Some(cfg.start_time_ns + 5_000_000_000), None);
-    write_tum(std::fs::File::create(dir.path().join("r.tum")).unwrap(), &reference).unwrap();
-    write_tum(std::fs::File::create(dir.path().join("e.tum")).unwrap(), &mission.estimate).unwrap();
+    write_tum(
+        std::fs::File::create(dir.path().join("r.tum")).unwrap(),
+        &reference,
+    )
+    .unwrap();
+    write_tum(
+        std::fs::File::create(dir.path().join("e.tum")).unwrap(),
+        &mission.estimate,
+    )
+    .unwrap();
     let json = dir.path().join("weak.json");
     let (r, e) = (dir.path().join("r.tum"), dir.path().join("e.tum"));
-    let o = run(&["eval", "--reference-file", s(&r), "--estimate-file", s(&e), "--json", s(&json), "--quiet"]);
+    let o = run(&[
+        "eval",
+        "--reference-file",
+        s(&r),
+        "--estimate-file",
+        s(&e),
+        "--json",
+        s(&json),
+        "--quiet",
+    ]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(report["estimates"][0]["time_offset"]["status"], "weak");
     assert_eq!(report["estimates"][0]["time_offset"]["applied_s"], 0.0);
 }

@@ -15,7 +15,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Find each estimate's clock offset to the reference and its Drift Error.
-    Eval(EvalArgs),
+    Eval(Box<EvalArgs>),
     /// List a recording's channels, their types and counts, and which trajdrift can read.
     Topics(TopicsArgs),
     /// Write a simulated mission (ROS 2 MCAP) with known truth.
@@ -91,7 +91,12 @@ pub struct EvalArgs {
     #[arg(long, value_name = "S", default_value_t = 2.0)]
     pub dt_max: f64,
     /// Drift Error window sizes, metres of reference path (comma-separated).
-    #[arg(long, value_name = "M[,M...]", value_delimiter = ',', default_value = "5")]
+    #[arg(
+        long,
+        value_name = "M[,M...]",
+        value_delimiter = ',',
+        default_value = "5"
+    )]
     pub window: Vec<f64>,
     /// Window overlap as a fraction in [0, 1).
     #[arg(long, default_value_t = 0.0)]
@@ -155,7 +160,12 @@ pub struct SimulateArgs {
     #[arg(long, default_value_t = 0.02, allow_hyphen_values = true)]
     pub scale_error: f64,
     /// Estimate sensor position in the body frame, x,y,z metres.
-    #[arg(long, value_name = "X,Y,Z", default_value = "0,0.3,0", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        default_value = "0,0.3,0",
+        allow_hyphen_values = true
+    )]
     pub lever: String,
     /// Repeat the route this many times (longer missions).
     #[arg(long, default_value_t = 1)]
@@ -175,5 +185,6 @@ pub fn parse_triple(flag: &str, s: &str) -> Result<[f64; 3], String> {
         .map(|x| x.trim().parse::<f64>())
         .collect::<Result<_, _>>()
         .map_err(|_| format!("{flag} takes three comma-separated numbers, got `{s}`"))?;
-    <[f64; 3]>::try_from(v).map_err(|_| format!("{flag} takes three comma-separated numbers, got `{s}`"))
+    <[f64; 3]>::try_from(v)
+        .map_err(|_| format!("{flag} takes three comma-separated numbers, got `{s}`"))
 }

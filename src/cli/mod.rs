@@ -11,13 +11,15 @@ use std::process::ExitCode;
 pub const EXIT_OK: u8 = 0;
 /// The command failed (bad input, I/O error).
 pub const EXIT_FAILURE: u8 = 1;
+/// The command line or a parameter value is wrong.
+pub const EXIT_USAGE: u8 = 2;
 /// The command finished, but with a warning the user must see (weak offset, truncated recording).
 pub const EXIT_WARNING: u8 = 3;
 
 /// Dispatches a parsed command line and maps the outcome to an exit code.
 pub fn run(cli: args::Cli) -> ExitCode {
     let result = match cli.command {
-        args::Command::Eval(a) => commands::eval::run(a),
+        args::Command::Eval(a) => commands::eval::run(*a),
         args::Command::Topics(a) => commands::topics::run(a),
         args::Command::Simulate(a) => commands::simulate::run(a),
     };
@@ -25,7 +27,11 @@ pub fn run(cli: args::Cli) -> ExitCode {
         Ok(code) => ExitCode::from(code),
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(EXIT_FAILURE)
+            let usage = matches!(
+                e.downcast_ref::<trajdrift::Error>(),
+                Some(trajdrift::Error::InvalidArgument(_))
+            );
+            ExitCode::from(if usage { EXIT_USAGE } else { EXIT_FAILURE })
         }
     }
 }

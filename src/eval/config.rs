@@ -69,7 +69,11 @@ impl NamedInput {
     pub fn file(spec: &str) -> Self {
         let (name, path) = split_name(spec);
         let path = PathBuf::from(path);
-        let name = name.unwrap_or_else(|| path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
+        let name = name.unwrap_or_else(|| {
+            path.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        });
         NamedInput {
             name,
             input: TrajectoryInput::TumFile(path),
@@ -125,7 +129,11 @@ pub struct EvalConfig {
 
 impl EvalConfig {
     /// A request with the paper's defaults for `reference` and `estimates`.
-    pub fn new(recording: Option<PathBuf>, reference: NamedInput, estimates: Vec<NamedInput>) -> Self {
+    pub fn new(
+        recording: Option<PathBuf>,
+        reference: NamedInput,
+        estimates: Vec<NamedInput>,
+    ) -> Self {
         EvalConfig {
             recording,
             reference,
@@ -153,12 +161,16 @@ impl EvalConfig {
 
     /// ε for curvature: `--curvature-eps`, else `--eps-min`, else the platform's.
     pub fn curvature_eps(&self) -> f64 {
-        self.curvature_eps_m.or(self.eps_min_m).unwrap_or(self.platform.eps_min_m())
+        self.curvature_eps_m
+            .or(self.eps_min_m)
+            .unwrap_or(self.platform.eps_min_m())
     }
 
     /// ε for path lengths: `--path-eps`, else `--eps-min`, else the platform's.
     pub fn path_eps(&self) -> f64 {
-        self.path_eps_m.or(self.eps_min_m).unwrap_or(self.platform.eps_min_m())
+        self.path_eps_m
+            .or(self.eps_min_m)
+            .unwrap_or(self.platform.eps_min_m())
     }
 
     /// Eq. (1)'s parameters.
@@ -200,7 +212,9 @@ impl EvalConfig {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(Error::InvalidArgument(format!("{name} must be a positive number, got {v}")))
+                Err(Error::InvalidArgument(format!(
+                    "{name} must be a positive number, got {v}"
+                )))
             }
         };
         if self.estimates.is_empty() {
@@ -215,7 +229,10 @@ impl EvalConfig {
         let mut names: Vec<&str> = self.estimates.iter().map(|e| e.name.as_str()).collect();
         names.sort();
         if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
-            return bad(format!("two estimates are named `{}`; name them with --estimate NAME=TOPIC", w[0]));
+            return bad(format!(
+                "two estimates are named `{}`; name them with --estimate NAME=TOPIC",
+                w[0]
+            ));
         }
         positive("--curvature-eps", self.curvature_eps())?;
         positive("--path-eps", self.path_eps())?;
@@ -233,7 +250,10 @@ impl EvalConfig {
             positive("--window", w)?;
         }
         if !(0.0..1.0).contains(&self.overlap) {
-            return bad(format!("--overlap is a fraction in [0, 1), got {}", self.overlap));
+            return bad(format!(
+                "--overlap is a fraction in [0, 1), got {}",
+                self.overlap
+            ));
         }
         if let (Some(a), Some(b)) = (self.t_start, self.t_end) {
             if a >= b {
@@ -257,13 +277,20 @@ mod tests {
     fn names_default_to_the_topic() {
         assert_eq!(NamedInput::topic("/estimate/odom").name, "estimate/odom");
         assert_eq!(NamedInput::topic("lio=/estimate/odom").name, "lio");
-        assert_eq!(NamedInput::topic("/tf:odom:base_link").name, "tf/odom/base_link");
+        assert_eq!(
+            NamedInput::topic("/tf:odom:base_link").name,
+            "tf/odom/base_link"
+        );
         assert_eq!(NamedInput::file("runs/est.tum").name, "est");
     }
 
     #[test]
     fn eps_precedence() {
-        let mut c = EvalConfig::new(None, NamedInput::file("r.tum"), vec![NamedInput::file("e.tum")]);
+        let mut c = EvalConfig::new(
+            None,
+            NamedInput::file("r.tum"),
+            vec![NamedInput::file("e.tum")],
+        );
         assert_eq!(c.curvature_eps(), 0.1);
         c.platform = Platform::Wheeled;
         assert_eq!(c.path_eps(), 0.3);

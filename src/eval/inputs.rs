@@ -6,8 +6,8 @@ use std::path::Path;
 use crate::error::{Error, Result};
 use crate::eval::config::{EvalConfig, NamedInput, TrajectoryInput};
 use crate::sources::mcap::McapSource;
-use crate::sources::{ExtractOptions, Progress, Source, Warning};
 use crate::sources::tum::read_tum;
+use crate::sources::{ExtractOptions, Progress, Source, Warning};
 use crate::trajectory::Trajectory;
 
 /// A trajectory with what the report says about its origin.
@@ -35,7 +35,9 @@ pub struct Inputs {
 
 /// Reads every input of `config`.
 pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
-    let all: Vec<&NamedInput> = std::iter::once(&config.reference).chain(&config.estimates).collect();
+    let all: Vec<&NamedInput> = std::iter::once(&config.reference)
+        .chain(&config.estimates)
+        .collect();
     let topics: Vec<String> = all
         .iter()
         .filter_map(|i| match &i.input {
@@ -62,7 +64,9 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
             let p = match &config.reference.input {
                 TrajectoryInput::TumFile(p) => p.clone(),
                 TrajectoryInput::Topic(_) => {
-                    return Err(Error::InvalidArgument("a topic was given but no RECORDING".into()));
+                    return Err(Error::InvalidArgument(
+                        "a topic was given but no RECORDING".into(),
+                    ));
                 }
             };
             let bytes = std::fs::metadata(&p).map_err(|e| Error::io(&p, e))?.len();
@@ -77,7 +81,9 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
                 let ex = extraction
                     .as_ref()
                     .and_then(|e| e.topics.iter().find(|x| &x.topic == t))
-                    .ok_or_else(|| Error::InvalidArgument(format!("topic {t} was not extracted")))?;
+                    .ok_or_else(|| {
+                        Error::InvalidArgument(format!("topic {t} was not extracted"))
+                    })?;
                 Loaded {
                     name: input.name.clone(),
                     label: t.clone(),

@@ -10,8 +10,8 @@ use crate::align::time_offset::{estimate_time_offset, OffsetEstimate, OffsetMeth
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult};
 use crate::report::json::{
-    DriftErrorReport, EstimateReport, Input, OffsetMethodReport, Parameters, Report, TimeOffsetReport, TopicReport,
-    Tool, WindowReport, SCHEMA_VERSION,
+    DriftErrorReport, EstimateReport, Input, OffsetMethodReport, Parameters, Report,
+    TimeOffsetReport, Tool, TopicReport, WindowReport, SCHEMA_VERSION,
 };
 use crate::sources::{Progress, Warning};
 use config::EvalConfig;
@@ -28,7 +28,13 @@ pub fn evaluate(config: &EvalConfig, progress: Progress<'_>) -> Result<Report> {
     let reference = &mut inputs.reference;
     let t0_ns = reference.trajectory.stamps_ns.first().copied().unwrap_or(0);
     let crop = |v: Option<f64>| {
-        v.map(|s| if s.abs() < 1e8 { t0_ns + (s * 1e9).round() as i64 } else { (s * 1e9).round() as i64 })
+        v.map(|s| {
+            if s.abs() < 1e8 {
+                t0_ns + (s * 1e9).round() as i64
+            } else {
+                (s * 1e9).round() as i64
+            }
+        })
     };
     let (crop_start, crop_end) = (crop(config.t_start), crop(config.t_end));
     reference.trajectory.crop(crop_start, crop_end);
@@ -158,9 +164,17 @@ fn evaluate_estimate(
             let params = config.offset_params();
             let runs: Vec<(OffsetMethod, Result<OffsetEstimate>)> = OFFSET_METHODS
                 .par_iter()
-                .map(|&m| (m, estimate_time_offset(m, &ref_t, ref_p, &est_t, est_p, &params)))
+                .map(|&m| {
+                    (
+                        m,
+                        estimate_time_offset(m, &ref_t, ref_p, &est_t, est_p, &params),
+                    )
+                })
                 .collect();
-            let chosen = runs.iter().find(|(m, _)| *m == config.offset_method).map(|(_, r)| r);
+            let chosen = runs
+                .iter()
+                .find(|(m, _)| *m == config.offset_method)
+                .map(|(_, r)| r);
             let methods = runs.iter().map(|(m, r)| method_report(*m, r)).collect();
             match chosen {
                 Some(Ok(o)) if o.status == OffsetStatus::Ok => TimeOffsetReport {
@@ -172,7 +186,9 @@ fn evaluate_estimate(
                     status: "ok".into(),
                     methods,
                 },
-                Some(Err(e @ Error::NoOverlap { .. })) => return Err(clone_no_overlap(e, &est.label)),
+                Some(Err(e @ Error::NoOverlap { .. })) => {
+                    return Err(clone_no_overlap(e, &est.label))
+                }
                 other => {
                     let (offset_s, correlation, confidence) = match other {
                         Some(Ok(o)) => (o.offset_s, Some(o.correlation), Some(o.confidence)),
@@ -207,7 +223,10 @@ fn evaluate_estimate(
     aligned.crop(crop.0, crop.1);
     let aligned_t = aligned.times_s(t0_ns);
     if aligned.len() < 3 {
-        let (r0, r1) = (ref_t.first().copied().unwrap_or(0.0), ref_t.last().copied().unwrap_or(0.0));
+        let (r0, r1) = (
+            ref_t.first().copied().unwrap_or(0.0),
+            ref_t.last().copied().unwrap_or(0.0),
+        );
         return Err(Error::NoOverlap {
             estimate: est.label.clone(),
             est_start: est_t.first().copied().unwrap_or(0.0),
@@ -219,11 +238,18 @@ fn evaluate_estimate(
     }
     let t0_s = t0_ns as f64 * 1e-9;
     let params = config.drift_params(config.windows_m[0]);
-    let drift = drift_error_windows(&ref_t, ref_p, &aligned_t, &aligned.positions, &params, &config.windows_m)
-        .map_err(|e| relabel(e, &est.label))?
-        .iter()
-        .map(|r| drift_report(r, t0_s))
-        .collect();
+    let drift = drift_error_windows(
+        &ref_t,
+        ref_p,
+        &aligned_t,
+        &aligned.positions,
+        &params,
+        &config.windows_m,
+    )
+    .map_err(|e| relabel(e, &est.label))?
+    .iter()
+    .map(|r| drift_report(r, t0_s))
+    .collect();
     Ok((
         EstimateReport {
             name: est.name.clone(),
@@ -289,7 +315,11 @@ fn drift_report(r: &DriftErrorResult, t0_s: f64) -> DriftErrorReport {
         min: s.map(|s| s.min),
         max: s.map(|s| s.max),
         discarded_fraction: r.discarded_fraction,
-        excluded_intervals: r.excluded_intervals.iter().map(|iv| [iv[0] + t0_s, iv[1] + t0_s]).collect(),
+        excluded_intervals: r
+            .excluded_intervals
+            .iter()
+            .map(|iv| [iv[0] + t0_s, iv[1] + t0_s])
+            .collect(),
         per_window: r
             .windows
             .iter()

@@ -26,7 +26,11 @@ pub fn render(report: &Report) -> String {
     );
     for e in &report.estimates {
         let o = &e.time_offset;
-        let _ = writeln!(s, "\nestimate {} ({}, {}, {} samples)", e.name, e.topic, e.type_name, e.samples);
+        let _ = writeln!(
+            s,
+            "\nestimate {} ({}, {}, {} samples)",
+            e.name, e.topic, e.type_name, e.samples
+        );
         let _ = writeln!(
             s,
             "  time offset  {:+.4} s  applied {:+.4} s  method {}  ρ {}  confidence {}  status {}",
@@ -42,7 +46,8 @@ pub fn render(report: &Report) -> String {
                 s,
                 "    {:<10} {}  ρ {}  confidence {}  {}",
                 m.method,
-                m.offset_s.map_or("      -".into(), |v| format!("{v:+.4} s")),
+                m.offset_s
+                    .map_or("      -".into(), |v| format!("{v:+.4} s")),
                 m.correlation.map_or("-".into(), |c| format!("{c:.3}")),
                 m.confidence.map_or("-".into(), |c| format!("{c:.2}")),
                 m.error.as_deref().unwrap_or(&m.status)
@@ -72,7 +77,11 @@ pub fn render(report: &Report) -> String {
         }
         if let Some(d) = e.drift_error.first() {
             if !d.excluded_intervals.is_empty() {
-                let _ = writeln!(s, "  rotation in place excluded: {} intervals", d.excluded_intervals.len());
+                let _ = writeln!(
+                    s,
+                    "  rotation in place excluded: {} intervals",
+                    d.excluded_intervals.len()
+                );
             }
         }
     }

@@ -99,7 +99,10 @@ pub fn simulate(config: &MissionConfig, route: &[Segment]) -> Mission {
     const RATE: f64 = 1000.0;
     let states = integrate(route, RATE, 0.4, 1.0);
     let duration_s = states.last().map_or(0.0, |s| s.t);
-    let body_path_m = states.windows(2).map(|w| (w[1].position - w[0].position).norm()).sum();
+    let body_path_m = states
+        .windows(2)
+        .map(|w| (w[1].position - w[0].position).norm())
+        .sum();
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
     let lever = |l: [f64; 3]| Vector3::new(l[0], l[1], l[2]);
     let sensor = |t: f64, l: &Vector3<f64>| {
@@ -115,7 +118,11 @@ pub fn simulate(config: &MissionConfig, route: &[Segment]) -> Mission {
         let t = i as f64 / config.ref_rate_hz;
         let (p, _) = sensor(t, &ref_lever);
         let noise = white(&mut rng, config.ref_noise_m);
-        reference.push(config.start_time_ns + (t * 1e9).round() as i64, p + noise, None);
+        reference.push(
+            config.start_time_ns + (t * 1e9).round() as i64,
+            p + noise,
+            None,
+        );
     }
 
     // The estimate: increments of its sensor's true path, scaled, in a frame that starts at the identity.

@@ -55,7 +55,11 @@ pub fn integrate(segments: &[Segment], rate_hz: f64, yaw0: f64, accel: f64) -> V
                 }
             }
         }
-        out.push(BodyState { t, position: p, yaw });
+        out.push(BodyState {
+            t,
+            position: p,
+            yaw,
+        });
         v += (seg.speed_mps - v).clamp(-accel * dt, accel * dt);
         k += (seg.curvature - k).clamp(-0.5 * dt, 0.5 * dt);
         yaw += v * k * dt;

@@ -5,7 +5,9 @@ use std::collections::BTreeMap;
 use std::io::{Seek, Write};
 
 use crate::decode::cdr::encode_le;
-use crate::decode::ros2_msgs::{Header, Odometry, Point, PointStamped, Pose, PoseWithCovariance, Quaternion, Time};
+use crate::decode::ros2_msgs::{
+    Header, Odometry, Point, PointStamped, Pose, PoseWithCovariance, Quaternion, Time,
+};
 use crate::decode::ros2_schemas::schema_text;
 use crate::error::{Error, Result};
 use crate::simulate::Mission;
@@ -34,26 +36,52 @@ pub fn write_mcap<W: Write + Seek>(out: W, mission: &Mission, bulk_bytes: usize)
         .create(out)
         .map_err(mcap_err)?;
     let channel = |w: &mut mcap::Writer<W>, topic: &str, ty: &str| -> Result<u16> {
-        let text = schema_text(ty).ok_or_else(|| Error::InvalidArgument(format!("no schema text for {ty}")))?;
-        let schema = w.add_schema(ty, "ros2msg", text.as_bytes()).map_err(mcap_err)?;
-        w.add_channel(schema, topic, "cdr", &BTreeMap::new()).map_err(mcap_err)
+        let text = schema_text(ty)
+            .ok_or_else(|| Error::InvalidArgument(format!("no schema text for {ty}")))?;
+        let schema = w
+            .add_schema(ty, "ros2msg", text.as_bytes())
+            .map_err(mcap_err)?;
+        w.add_channel(schema, topic, "cdr", &BTreeMap::new())
+            .map_err(mcap_err)
     };
     let ref_ch = channel(&mut w, REFERENCE_TOPIC, "geometry_msgs/msg/PointStamped")?;
     let est_ch = channel(&mut w, ESTIMATE_TOPIC, "nav_msgs/msg/Odometry")?;
     let bulk_ch = if bulk_bytes > 0 {
-        let schema = w.add_schema("sensor_msgs/msg/Image", "ros2msg", b"# opaque bulk payload").map_err(mcap_err)?;
-        Some(w.add_channel(schema, BULK_TOPIC, "cdr", &BTreeMap::new()).map_err(mcap_err)?)
+        let schema = w
+            .add_schema("sensor_msgs/msg/Image", "ros2msg", b"# opaque bulk payload")
+            .map_err(mcap_err)?;
+        Some(
+            w.add_channel(schema, BULK_TOPIC, "cdr", &BTreeMap::new())
+                .map_err(mcap_err)?,
+        )
     } else {
         None
     };
 
     // Interleave the streams in stamp order, as a recorder would.
     let mut events: Vec<(i64, u8, usize)> = Vec::new();
-    events.extend(mission.reference.stamps_ns.iter().enumerate().map(|(i, &t)| (t, 0u8, i)));
-    events.extend(mission.estimate.stamps_ns.iter().enumerate().map(|(i, &t)| (t, 1u8, i)));
+    events.extend(
+        mission
+            .reference
+            .stamps_ns
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| (t, 0u8, i)),
+    );
+    events.extend(
+        mission
+            .estimate
+            .stamps_ns
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| (t, 1u8, i)),
+    );
     if bulk_ch.is_some() {
         let t0 = mission.config.start_time_ns;
-        events.extend((0..(mission.duration_s * 10.0) as usize).map(|i| (t0 + i as i64 * 100_000_000 + 1, 2u8, i)));
+        events.extend(
+            (0..(mission.duration_s * 10.0) as usize)
+                .map(|i| (t0 + i as i64 * 100_000_000 + 1, 2u8, i)),
+        );
     }
     events.sort();
     let mut seq = [0u32; 3];
@@ -67,13 +95,22 @@ pub fn write_mcap<W: Write + Seek>(out: W, mission: &Mission, bulk_bytes: usize)
                         stamp: Time::from_ns(stamp),
                         frame_id: "map".into(),
                     },
-                    point: Point { x: p.x, y: p.y, z: p.z },
+                    point: Point {
+                        x: p.x,
+                        y: p.y,
+                        z: p.z,
+                    },
                 };
                 (ref_ch, encode_le(&msg))
             }
             1 => {
                 let p = mission.estimate.positions[i];
-                let q = mission.estimate.orientations.as_ref().map(|o| o[i]).unwrap_or_default();
+                let q = mission
+                    .estimate
+                    .orientations
+                    .as_ref()
+                    .map(|o| o[i])
+                    .unwrap_or_default();
                 let msg = Odometry {
                     header: Header {
                         stamp: Time::from_ns(stamp),
@@ -82,7 +119,11 @@ pub fn write_mcap<W: Write + Seek>(out: W, mission: &Mission, bulk_bytes: usize)
                     child_frame_id: "base_link".into(),
                     pose: PoseWithCovariance {
                         pose: Pose {
-                            position: Point { x: p.x, y: p.y, z: p.z },
+                            position: Point {
+                                x: p.x,
+                                y: p.y,
+                                z: p.z,
+                            },
                             orientation: Quaternion {
                                 x: q.i,
                                 y: q.j,
@@ -124,7 +165,9 @@ pub fn write_mcap<W: Write + Seek>(out: W, mission: &Mission, bulk_bytes: usize)
 /// The truth of `mission` as JSON (the same keys as the shared fixtures' `truth.json` where they apply).
 pub fn truth_json(mission: &Mission) -> serde_json::Value {
     let c = &mission.config;
-    let d: Vec<f64> = (0..3).map(|k| c.est_lever_m[k] - c.ref_lever_m[k]).collect();
+    let d: Vec<f64> = (0..3)
+        .map(|k| c.est_lever_m[k] - c.ref_lever_m[k])
+        .collect();
     serde_json::json!({
         "generator": concat!("trajdrift simulate ", env!("CARGO_PKG_VERSION")),
         "config": c,

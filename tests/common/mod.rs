@@ -4,7 +4,13 @@
 use std::path::PathBuf;
 
 /// The five shared missions.
-pub const MISSIONS: [&str; 5] = ["lever_arm", "gnss_outages", "legged", "legged_spins", "straight"];
+pub const MISSIONS: [&str; 5] = [
+    "lever_arm",
+    "gnss_outages",
+    "legged",
+    "legged_spins",
+    "straight",
+];
 
 /// `$TRAJDRIFT_SHARED` (default `../shared`). In CI (`CI` or `TRAJDRIFT_SHARED` set) a missing folder
 /// fails the test; on a developer machine without it the test is skipped with a message.
@@ -18,9 +24,15 @@ pub fn shared() -> Option<PathBuf> {
         return Some(dir);
     }
     if explicit.is_some() || std::env::var_os("CI").is_some() {
-        panic!("shared data missing at {} (TRAJDRIFT_SHARED); CI must have it", dir.display());
+        panic!(
+            "shared data missing at {} (TRAJDRIFT_SHARED); CI must have it",
+            dir.display()
+        );
     }
-    eprintln!("skipped: shared data not found at {} (set TRAJDRIFT_SHARED)", dir.display());
+    eprintln!(
+        "skipped: shared data not found at {} (set TRAJDRIFT_SHARED)",
+        dir.display()
+    );
     None
 }
 

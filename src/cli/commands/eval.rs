@@ -9,7 +9,9 @@ use trajdrift::metrics::lever::LeverCorrection;
 use trajdrift::report::{output::write_output, table};
 use trajdrift::sources::StampSource;
 
-use crate::cli::args::{parse_triple, EvalArgs, LeverCorrectionArg, OffsetMethodArg, PlatformArg, StampArg};
+use crate::cli::args::{
+    parse_triple, EvalArgs, LeverCorrectionArg, OffsetMethodArg, PlatformArg, StampArg,
+};
 use crate::cli::progress::ReadProgress;
 use crate::cli::{EXIT_OK, EXIT_WARNING};
 
@@ -31,7 +33,12 @@ pub fn config_from_args(a: &EvalArgs) -> Result<EvalConfig> {
         StampArg::Header => StampSource::Header,
         StampArg::Log => StampSource::Log,
     };
-    c.origin = a.origin.as_deref().map(|s| parse_triple("--origin", s)).transpose().map_err(|e| anyhow!(e))?;
+    c.origin = a
+        .origin
+        .as_deref()
+        .map(|s| parse_triple("--origin", s))
+        .transpose()
+        .map_err(|e| anyhow!(e))?;
     c.platform = match a.platform {
         PlatformArg::Legged => Platform::Legged,
         PlatformArg::Wheeled => Platform::Wheeled,
@@ -84,5 +91,9 @@ pub fn run(a: EvalArgs) -> Result<u8> {
     for w in &report.warnings {
         eprintln!("warning [{}]: {}", w.code, w.message);
     }
-    Ok(if report.warnings.is_empty() { EXIT_OK } else { EXIT_WARNING })
+    Ok(if report.warnings.is_empty() {
+        EXIT_OK
+    } else {
+        EXIT_WARNING
+    })
 }

@@ -13,7 +13,10 @@ use crate::cli::EXIT_OK;
 /// Runs the command; returns the exit code.
 pub fn run(a: SimulateArgs) -> Result<u8> {
     if a.out.exists() && !a.force {
-        return Err(anyhow!("{}: exists; pass --force to replace it", a.out.display()));
+        return Err(anyhow!(
+            "{}: exists; pass --force to replace it",
+            a.out.display()
+        ));
     }
     let config = MissionConfig {
         seed: a.seed,
@@ -22,12 +25,17 @@ pub fn run(a: SimulateArgs) -> Result<u8> {
         est_lever_m: parse_triple("--lever", &a.lever).map_err(|e| anyhow!(e))?,
         ..MissionConfig::default()
     };
-    let route: Vec<_> = std::iter::repeat_n(default_route(), a.laps.max(1)).flatten().collect();
+    let route: Vec<_> = std::iter::repeat_n(default_route(), a.laps.max(1))
+        .flatten()
+        .collect();
     let mission = simulate(&config, &route);
     let bulk_messages = (mission.duration_s * 10.0).max(1.0);
     let bulk_bytes = (a.bulk_mib as f64 * 1024.0 * 1024.0 / bulk_messages) as usize;
-    let tmp = a.out.with_extension(format!("mcap.{}.tmp", std::process::id()));
-    let file = std::fs::File::create(&tmp).with_context(|| format!("{}: cannot create", tmp.display()))?;
+    let tmp = a
+        .out
+        .with_extension(format!("mcap.{}.tmp", std::process::id()));
+    let file =
+        std::fs::File::create(&tmp).with_context(|| format!("{}: cannot create", tmp.display()))?;
     let written = write_mcap(std::io::BufWriter::new(file), &mission, bulk_bytes);
     if let Err(e) = written {
         let _ = std::fs::remove_file(&tmp);

@@ -21,8 +21,16 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
             return Ok(EXIT_OK);
         }
     }
-    let width = topics.iter().map(|t| t.topic.len()).max().unwrap_or(5).max(5);
-    println!("{:<width$}  {:<36} {:>9}  trajectory", "topic", "type", "messages");
+    let width = topics
+        .iter()
+        .map(|t| t.topic.len())
+        .max()
+        .unwrap_or(5)
+        .max(5);
+    println!(
+        "{:<width$}  {:<36} {:>9}  trajectory",
+        "topic", "type", "messages"
+    );
     for t in &topics {
         println!(
             "{:<width$}  {:<36} {:>9}  {}",
