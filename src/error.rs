@@ -84,6 +84,22 @@ pub enum Error {
     /// Writing an output failed.
     #[error("{path}: cannot write: {detail}")]
     Output { path: PathBuf, detail: String },
+
+    /// A ROS 1 bag is damaged or not a version 2.0 bag.
+    #[error("{path}: cannot read ROS 1 bag ({detail}); check it with `rosbag info`, or `rosbag reindex` a copy")]
+    CorruptBag { path: PathBuf, detail: String },
+
+    /// A ROS 1 bag chunk uses a compression trajdrift does not read.
+    #[error("{path}: ROS 1 bag chunk at byte {offset} uses compression `{compression}` (supported: none, bz2, lz4); run `rosbag decompress` on a copy first")]
+    UnsupportedCompression {
+        path: PathBuf,
+        offset: u64,
+        compression: String,
+    },
+
+    /// A rosbag2 folder cannot be read (metadata.yaml, its files, or the sqlite3 database).
+    #[error("{path}: rosbag2 folder: {detail}")]
+    Rosbag2 { path: PathBuf, detail: String },
 }
 
 impl Error {

@@ -1,15 +1,17 @@
 //! Message decoding: bytes of one message → a pose or a position sample.
 //!
-//! [`cdr`] reads ROS 2 CDR, [`ros2_msgs`] holds the message layouts, [`sample`] picks the layout by
+//! [`cdr`] reads ROS 2 CDR, [`ros1`] ROS 1 serialization, [`tf`] turns TF messages into edges, [`ros2_msgs`] holds the message layouts, [`sample`] picks the layout by
 //! schema name and yields a [`Sample`], [`geodesy`] turns latitude/longitude into local ENU metres, and
 //! [`ros2_schemas`] holds the schema texts needed to write MCAP files.
 
 pub mod cdr;
 pub mod geodesy;
+pub mod ros1;
 pub mod ros2_msgs;
 pub mod ros2_schemas;
 pub mod sample;
+pub mod tf;
 
 pub use sample::{
-    decode_sample, message_kind, supported_types, MessageKind, Sample, SamplePosition,
+    decode_message, decode_sample, message_kind, Encoding, supported_types, MessageKind, Sample, SamplePosition,
 };

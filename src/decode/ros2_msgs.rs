@@ -136,3 +136,32 @@ pub struct NavSatFix {
     pub position_covariance: [f64; 9],
     pub position_covariance_type: u8,
 }
+
+/// `geometry_msgs/msg/PoseWithCovarianceStamped` (what AMCL publishes).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct PoseWithCovarianceStamped {
+    pub header: Header,
+    pub pose: PoseWithCovariance,
+}
+
+/// `geometry_msgs/msg/Transform`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Transform {
+    /// `geometry_msgs/Vector3 translation` (same layout as a point).
+    pub translation: Point,
+    pub rotation: Quaternion,
+}
+
+/// `geometry_msgs/msg/TransformStamped`: the pose of `child_frame_id` in `header.frame_id`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TransformStamped {
+    pub header: Header,
+    pub child_frame_id: String,
+    pub transform: Transform,
+}
+
+/// `tf2_msgs/msg/TFMessage`: a batch of transforms (`/tf`, `/tf_static`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TFMessage {
+    pub transforms: Vec<TransformStamped>,
+}

@@ -131,6 +131,67 @@ int8 status
 uint16 service
 "#;
 
+/// `geometry_msgs/msg/PoseWithCovarianceStamped` as a `ros2msg` schema.
+pub const POSE_WITH_COVARIANCE_STAMPED: &str = r#"std_msgs/Header header
+geometry_msgs/PoseWithCovariance pose
+================================================================================
+MSG: std_msgs/Header
+builtin_interfaces/Time stamp
+string frame_id
+================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+================================================================================
+MSG: geometry_msgs/PoseWithCovariance
+geometry_msgs/Pose pose
+float64[36] covariance
+================================================================================
+MSG: geometry_msgs/Pose
+geometry_msgs/Point position
+geometry_msgs/Quaternion orientation
+================================================================================
+MSG: geometry_msgs/Point
+float64 x
+float64 y
+float64 z
+================================================================================
+MSG: geometry_msgs/Quaternion
+float64 x
+float64 y
+float64 z
+float64 w
+"#;
+
+/// `geometry_msgs/msg/TransformStamped` as a `ros2msg` schema.
+pub const TRANSFORM_STAMPED: &str = r#"std_msgs/Header header
+string child_frame_id
+geometry_msgs/Transform transform
+================================================================================
+MSG: std_msgs/Header
+builtin_interfaces/Time stamp
+string frame_id
+================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+================================================================================
+MSG: geometry_msgs/Transform
+geometry_msgs/Vector3 translation
+geometry_msgs/Quaternion rotation
+================================================================================
+MSG: geometry_msgs/Vector3
+float64 x
+float64 y
+float64 z
+================================================================================
+MSG: geometry_msgs/Quaternion
+float64 x
+float64 y
+float64 z
+float64 w
+"#;
+
 /// The `ros2msg` schema text of `type_name` (e.g. `geometry_msgs/msg/PoseStamped`), for the types
 /// trajdrift reads and writes.
 pub fn schema_text(type_name: &str) -> Option<&'static str> {
@@ -139,6 +200,8 @@ pub fn schema_text(type_name: &str) -> Option<&'static str> {
         "geometry_msgs/msg/PointStamped" => Some(POINT_STAMPED),
         "nav_msgs/msg/Odometry" => Some(ODOMETRY),
         "sensor_msgs/msg/NavSatFix" => Some(NAV_SAT_FIX),
+        "geometry_msgs/msg/PoseWithCovarianceStamped" => Some(POSE_WITH_COVARIANCE_STAMPED),
+        "geometry_msgs/msg/TransformStamped" => Some(TRANSFORM_STAMPED),
         _ => None,
     }
 }

@@ -4,8 +4,11 @@
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
-use super::cdr;
-use super::ros2_msgs::{self, NavSatFix, Odometry, PointStamped, PoseStamped};
+use super::ros2_msgs::{
+    self, NavSatFix, Odometry, PointStamped, PoseStamped, PoseWithCovarianceStamped,
+    TransformStamped,
+};
+use super::{cdr, ros1};
 
 /// A message type trajdrift reads as a trajectory.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -18,14 +21,49 @@ pub enum MessageKind {
     Odometry,
     /// `sensor_msgs/msg/NavSatFix`: WGS84 latitude, longitude, ellipsoidal altitude.
     NavSatFix,
+    /// `geometry_msgs/msg/PoseWithCovarianceStamped`: pose (the covariance is ignored).
+    PoseWithCovarianceStamped,
+    /// `geometry_msgs/msg/TransformStamped`: the child frame's pose in the parent frame.
+    TransformStamped,
 }
 
-const SUPPORTED: [&str; 4] = [
+const SUPPORTED: [&str; 6] = [
     "geometry_msgs/msg/PoseStamped",
     "geometry_msgs/msg/PointStamped",
     "nav_msgs/msg/Odometry",
     "sensor_msgs/msg/NavSatFix",
+    "geometry_msgs/msg/PoseWithCovarianceStamped",
+    "geometry_msgs/msg/TransformStamped",
 ];
+
+/// How a message's bytes are serialized (the MCAP channel's `message_encoding`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Encoding {
+    /// ROS 2: CDR with a 4-byte encapsulation header (`cdr`).
+    Cdr,
+    /// ROS 1: little-endian, unaligned (`ros1`).
+    Ros1,
+}
+
+impl Encoding {
+    /// The encoding named by an MCAP `message_encoding` (`cdr`, `ros1`) or a rosbag2
+    /// `serialization_format`.
+    pub fn from_name(name: &str) -> Option<Encoding> {
+        match name {
+            "cdr" => Some(Encoding::Cdr),
+            "ros1" => Some(Encoding::Ros1),
+            _ => None,
+        }
+    }
+
+    /// The name as MCAP writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Encoding::Cdr => "cdr",
+            Encoding::Ros1 => "ros1",
+        }
+    }
+}
 
 /// Schema names of the message types trajdrift reads (ROS 2 spelling).
 pub fn supported_types() -> &'static [&'static str] {
@@ -41,6 +79,8 @@ pub fn message_kind(schema_name: &str) -> Option<MessageKind> {
         "geometry_msgs/PointStamped" => Some(MessageKind::PointStamped),
         "nav_msgs/Odometry" => Some(MessageKind::Odometry),
         "sensor_msgs/NavSatFix" => Some(MessageKind::NavSatFix),
+        "geometry_msgs/PoseWithCovarianceStamped" => Some(MessageKind::PoseWithCovarianceStamped),
+        "geometry_msgs/TransformStamped" => Some(MessageKind::TransformStamped),
         _ => None,
     }
 }
@@ -53,12 +93,20 @@ impl MessageKind {
             MessageKind::PointStamped => SUPPORTED[1],
             MessageKind::Odometry => SUPPORTED[2],
             MessageKind::NavSatFix => SUPPORTED[3],
+            MessageKind::PoseWithCovarianceStamped => SUPPORTED[4],
+            MessageKind::TransformStamped => SUPPORTED[5],
         }
     }
 
     /// True when samples carry an orientation.
     pub fn has_orientation(self) -> bool {
-        matches!(self, MessageKind::PoseStamped | MessageKind::Odometry)
+        matches!(
+            self,
+            MessageKind::PoseStamped
+                | MessageKind::Odometry
+                | MessageKind::PoseWithCovarianceStamped
+                | MessageKind::TransformStamped
+        )
     }
 
     /// True for latitude/longitude messages, which need an ENU origin.
@@ -104,10 +152,40 @@ impl Sample {
 
 /// Decodes one CDR message of `kind`.
 pub fn decode_sample(kind: MessageKind, data: &[u8]) -> Result<Sample, String> {
+    decode_message(kind, Encoding::Cdr, data)
+}
+
+/// Decodes one message of `kind` serialized with `encoding`.
+pub fn decode_message(kind: MessageKind, encoding: Encoding, data: &[u8]) -> Result<Sample, String> {
     let local = |p: ros2_msgs::Point| SamplePosition::Local(Vector3::new(p.x, p.y, p.z));
+    // The ROS 1 reader yields the same structs as CDR decoding.
+    macro_rules! read {
+        ($ty:ty, $ros1:path) => {
+            match encoding {
+                Encoding::Cdr => cdr::decode::<$ty>(data)?,
+                Encoding::Ros1 => $ros1(data)?,
+            }
+        };
+    }
     Ok(match kind {
+        MessageKind::PoseWithCovarianceStamped => {
+            let m = read!(PoseWithCovarianceStamped, ros1::pose_with_covariance_stamped);
+            Sample {
+                stamp_ns: m.header.stamp.to_ns(),
+                position: local(m.pose.pose.position),
+                orientation: orientation(m.pose.pose.orientation),
+            }
+        }
+        MessageKind::TransformStamped => {
+            let m = read!(TransformStamped, ros1::transform_stamped);
+            Sample {
+                stamp_ns: m.header.stamp.to_ns(),
+                position: local(m.transform.translation),
+                orientation: orientation(m.transform.rotation),
+            }
+        }
         MessageKind::PoseStamped => {
-            let m: PoseStamped = cdr::decode(data)?;
+            let m = read!(PoseStamped, ros1::pose_stamped);
             Sample {
                 stamp_ns: m.header.stamp.to_ns(),
                 position: local(m.pose.position),
@@ -115,7 +193,7 @@ pub fn decode_sample(kind: MessageKind, data: &[u8]) -> Result<Sample, String> {
             }
         }
         MessageKind::Odometry => {
-            let m: Odometry = cdr::decode(data)?;
+            let m = read!(Odometry, ros1::odometry);
             Sample {
                 stamp_ns: m.header.stamp.to_ns(),
                 position: local(m.pose.pose.position),
@@ -123,7 +201,7 @@ pub fn decode_sample(kind: MessageKind, data: &[u8]) -> Result<Sample, String> {
             }
         }
         MessageKind::PointStamped => {
-            let m: PointStamped = cdr::decode(data)?;
+            let m = read!(PointStamped, ros1::point_stamped);
             Sample {
                 stamp_ns: m.header.stamp.to_ns(),
                 position: local(m.point),
@@ -131,7 +209,7 @@ pub fn decode_sample(kind: MessageKind, data: &[u8]) -> Result<Sample, String> {
             }
         }
         MessageKind::NavSatFix => {
-            let m: NavSatFix = cdr::decode(data)?;
+            let m = read!(NavSatFix, ros1::nav_sat_fix);
             // STATUS_NO_FIX = -1; anything below FIX (0) is not a fix.
             let valid = m.status.status >= 0
                 && m.latitude.is_finite()

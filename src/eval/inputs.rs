@@ -5,9 +5,8 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::eval::config::{EvalConfig, NamedInput, TrajectoryInput};
-use crate::sources::mcap::McapSource;
 use crate::sources::tum::read_tum;
-use crate::sources::{ExtractOptions, Progress, Source, Warning};
+use crate::sources::{ExtractOptions, Progress, Warning};
 use crate::trajectory::Trajectory;
 
 /// A trajectory with what the report says about its origin.
@@ -48,7 +47,7 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
     let mut extraction = None;
     let (path, bytes) = match &config.recording {
         Some(rec) => {
-            let source = McapSource::open(rec)?;
+            let source = crate::sources::open(rec)?;
             if !topics.is_empty() {
                 let mut unique = topics.clone();
                 unique.dedup();

@@ -4,8 +4,14 @@
 //! questions through [`Source`]: which channels it holds, and the trajectories of the topics asked for.
 //! Eval, annotate and batch never care where samples came from.
 
+pub mod bag;
+pub mod extract;
 pub mod mcap;
+pub mod open;
+pub mod rosbag2;
 pub mod tum;
+
+pub use open::open;
 
 use crate::error::Result;
 use crate::trajectory::Trajectory;

@@ -3,15 +3,13 @@
 use anyhow::Result;
 
 use trajdrift::report::output::write_output;
-use trajdrift::sources::mcap::McapSource;
-use trajdrift::sources::Source;
 
 use crate::cli::args::TopicsArgs;
 use crate::cli::EXIT_OK;
 
 /// Runs the command; returns the exit code.
 pub fn run(a: TopicsArgs) -> Result<u8> {
-    let source = McapSource::open(&a.recording)?;
+    let source = trajdrift::sources::open(&a.recording)?;
     let topics = source.topics()?;
     if let Some(path) = &a.json {
         let mut bytes = serde_json::to_vec_pretty(&topics)?;

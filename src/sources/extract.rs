@@ -1,0 +1,302 @@
+//! Turning one streaming pass over any recording into trajectories.
+//!
+//! MCAP files, ROS 1 bags and rosbag2 folders differ in how they store messages, not in what
+//! extraction does with them: each implements [`Recording`] (its channels, one pass over its
+//! messages) and [`extract`] does the rest (routing by topic, decoding by schema and message
+//! encoding, dropping invalid samples, sorting, the ENU origin of geodetic topics).
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use nalgebra::Vector3;
+
+use crate::decode::{self, geodesy, Encoding, MessageKind, SamplePosition};
+use crate::error::{Error, Result};
+use crate::sources::mcap::{ChannelInfo, MessageRef, StreamOutcome};
+use crate::sources::{
+    ExtractOptions, ExtractedTopic, Extraction, Progress, StampSource, TopicInfo, Warning,
+};
+use crate::trajectory::Trajectory;
+
+/// Asked once per channel whether its messages are wanted.
+pub type Select<'a> = &'a mut dyn FnMut(&ChannelInfo) -> bool;
+/// Gets every message of a selected channel; an error stops the pass.
+pub type OnMessage<'a> = &'a mut dyn FnMut(&ChannelInfo, &MessageRef<'_>) -> Result<()>;
+
+/// A recording read by one streaming pass in file order.
+pub trait Recording {
+    /// What error messages name: the file or folder.
+    fn path(&self) -> &Path;
+    /// The channels when an index lists them without a pass (to fail fast on a wrong topic).
+    fn known_channels(&self) -> Option<Vec<ChannelInfo>>;
+    /// One pass over the messages. Channel ids must be unique across the whole recording.
+    fn pass(
+        &self,
+        select: Select<'_>,
+        progress: Progress<'_>,
+        on_message: OnMessage<'_>,
+    ) -> Result<StreamOutcome>;
+    /// The warning for a recording cut short at byte `offset`.
+    fn truncation_warning(&self, offset: u64) -> Warning {
+        Warning {
+            code: "truncated_recording".into(),
+            message: format!(
+                "{}: recording cut short at byte {offset} (the recorder probably stopped abruptly); read up to the last complete record",
+                self.path().display()
+            ),
+        }
+    }
+}
+
+/// The kind and encoding of a channel when trajdrift can decode it.
+pub fn channel_kind(c: &ChannelInfo) -> Option<(MessageKind, Encoding)> {
+    Some((
+        decode::message_kind(&c.schema_name)?,
+        Encoding::from_name(&c.message_encoding)?,
+    ))
+}
+
+/// Every supported type with the encodings it is read in, for error messages.
+pub fn supported_list() -> Vec<String> {
+    decode::supported_types()
+        .iter()
+        .map(|t| format!("{t} (cdr, ros1)"))
+        .collect()
+}
+
+/// `TopicInfo` rows from channels and counts.
+pub fn topic_infos(channels: Vec<ChannelInfo>, counts: &HashMap<u16, u64>) -> Vec<TopicInfo> {
+    channels
+        .into_iter()
+        .map(|c| TopicInfo {
+            readable: channel_kind(&c).is_some(),
+            message_count: counts.get(&c.id).copied().unwrap_or(0),
+            topic: c.topic,
+            type_name: c.schema_name,
+            message_encoding: c.message_encoding,
+        })
+        .collect()
+}
+
+fn unsupported(path: &Path, c: &ChannelInfo) -> Error {
+    let bad_encoding = decode::message_kind(&c.schema_name).is_some();
+    Error::UnsupportedType {
+        path: path.to_path_buf(),
+        topic: c.topic.clone(),
+        type_name: if bad_encoding {
+            format!(
+                "{} with message encoding `{}`",
+                c.schema_name, c.message_encoding
+            )
+        } else if c.schema_name.is_empty() {
+            format!("(no schema, message encoding `{}`)", c.message_encoding)
+        } else {
+            c.schema_name.clone()
+        },
+        supported: supported_list(),
+    }
+}
+
+/// Checks that every requested topic is among `channels` with a readable type.
+pub fn check_requested(path: &Path, topics: &[String], channels: &[ChannelInfo]) -> Result<()> {
+    for topic in topics {
+        let on_topic: Vec<&ChannelInfo> = channels.iter().filter(|c| &c.topic == topic).collect();
+        let Some(first) = on_topic.first() else {
+            let mut available: Vec<String> = channels.iter().map(|c| c.topic.clone()).collect();
+            available.sort();
+            available.dedup();
+            return Err(Error::TopicNotFound {
+                path: path.to_path_buf(),
+                topic: topic.clone(),
+                available,
+            });
+        };
+        if let Some(bad) = on_topic.iter().find(|c| channel_kind(c).is_none()) {
+            return Err(unsupported(path, bad));
+        }
+        let kind = |c: &ChannelInfo| channel_kind(c).map(|k| k.0);
+        if on_topic.iter().any(|c| kind(c) != kind(first)) {
+            return Err(unsupported(path, first));
+        }
+    }
+    Ok(())
+}
+
+/// A requested topic while the pass runs.
+struct Accumulator {
+    kind: MessageKind,
+    /// Positions; for a geodetic topic (latitude, longitude, altitude) until the end of the pass.
+    trajectory: Trajectory,
+    messages: u64,
+    invalid_dropped: u64,
+}
+
+impl Accumulator {
+    fn new(kind: MessageKind) -> Self {
+        Accumulator {
+            kind,
+            trajectory: Trajectory::new(kind.has_orientation()),
+            messages: 0,
+            invalid_dropped: 0,
+        }
+    }
+}
+
+/// Reads the trajectories of `topics` from `rec` in one pass (see [`crate::sources::Source::extract`]).
+pub fn extract(
+    rec: &dyn Recording,
+    topics: &[String],
+    options: &ExtractOptions,
+    progress: Progress<'_>,
+) -> Result<Extraction> {
+    if topics.is_empty() {
+        return Ok(Extraction::default());
+    }
+    let path = rec.path();
+    // Fail fast on a wrong topic when an index lists the channels.
+    if let Some(channels) = rec.known_channels() {
+        check_requested(path, topics, &channels)?;
+    }
+
+    // Each distinct requested topic once; `unique[i]` gets accumulator `i`.
+    let mut unique: Vec<&str> = Vec::new();
+    for t in topics {
+        if !unique.contains(&t.as_str()) {
+            unique.push(t.as_str());
+        }
+    }
+    let mut accumulators: Vec<Option<Accumulator>> = unique.iter().map(|_| None).collect();
+    // Channel id → (accumulator index, encoding), `None` for a channel whose type differs from the
+    // topic's first.
+    let mut route: HashMap<u16, Option<(usize, Encoding)>> = HashMap::new();
+
+    let outcome = rec.pass(
+        &mut |c| unique.contains(&c.topic.as_str()) && channel_kind(c).is_some(),
+        progress,
+        &mut |c, m| {
+            let slot = *route.entry(c.id).or_insert_with(|| {
+                let i = unique.iter().position(|t| *t == c.topic)?;
+                let (kind, encoding) = channel_kind(c)?;
+                let acc = accumulators[i].get_or_insert_with(|| Accumulator::new(kind));
+                // Two channels of one topic with different types: reported after the pass.
+                (acc.kind == kind).then_some((i, encoding))
+            });
+            let Some((acc, encoding)) =
+                slot.and_then(|(i, e)| accumulators[i].as_mut().map(|a| (a, e)))
+            else {
+                return Ok(());
+            };
+            let index = acc.messages;
+            acc.messages += 1;
+            let sample = decode::decode_message(acc.kind, encoding, m.data).map_err(|detail| {
+                Error::Decode {
+                    path: path.to_path_buf(),
+                    topic: c.topic.clone(),
+                    index,
+                    detail,
+                }
+            })?;
+            if !sample.is_valid() {
+                acc.invalid_dropped += 1;
+                return Ok(());
+            }
+            let stamp_ns = match options.stamp {
+                StampSource::Header => sample.stamp_ns,
+                StampSource::Log => i64::try_from(m.log_time).unwrap_or(i64::MAX),
+            };
+            let position = match sample.position {
+                SamplePosition::Local(p) => p,
+                SamplePosition::Geodetic {
+                    lat_deg,
+                    lon_deg,
+                    alt_m,
+                    ..
+                } => Vector3::new(lat_deg, lon_deg, alt_m),
+            };
+            acc.trajectory.push(stamp_ns, position, sample.orientation);
+            Ok(())
+        },
+    )?;
+    check_requested(path, topics, &outcome.channels)?;
+
+    let mut warnings = Vec::new();
+    if let Some(offset) = outcome.truncated_at {
+        warnings.push(rec.truncation_warning(offset));
+    }
+
+    // Topics without a message still get their (empty) trajectory of the right kind.
+    let mut accumulators: Vec<Accumulator> = accumulators
+        .into_iter()
+        .zip(&unique)
+        .map(|(acc, topic)| {
+            acc.or_else(|| {
+                outcome
+                    .channels
+                    .iter()
+                    .filter(|c| c.topic == *topic)
+                    .find_map(channel_kind)
+                    .map(|(kind, _)| Accumulator::new(kind))
+            })
+            .ok_or_else(|| Error::InvalidArgument(format!("{topic}: no readable channel")))
+        })
+        .collect::<Result<_>>()?;
+    let duplicates: Vec<u64> = accumulators
+        .iter_mut()
+        .map(|a| a.trajectory.sort_dedup() as u64)
+        .collect();
+
+    // The ENU origin: given, or the first valid fix (by stamp) of the first geodetic topic
+    // requested that has one.
+    let origin = options.origin.or_else(|| {
+        accumulators
+            .iter()
+            .filter(|a| a.kind.is_geodetic())
+            .find_map(|a| a.trajectory.positions.first())
+            .map(|p| [p.x, p.y, p.z])
+    });
+
+    let mut done: Vec<Option<ExtractedTopic>> = accumulators
+        .into_iter()
+        .zip(duplicates)
+        .zip(&unique)
+        .map(|((mut acc, duplicate_stamps), topic)| {
+            let mut geodetic_origin = None;
+            if acc.kind.is_geodetic() {
+                // `origin` is Some whenever a geodetic topic has a sample.
+                if let Some(o) = origin {
+                    for p in &mut acc.trajectory.positions {
+                        *p = geodesy::geodetic_to_enu(p.x, p.y, p.z, o);
+                    }
+                    geodetic_origin = Some(o);
+                }
+            }
+            Some(ExtractedTopic {
+                topic: topic.to_string(),
+                type_name: acc.kind.type_name().to_string(),
+                trajectory: acc.trajectory,
+                messages: acc.messages,
+                invalid_dropped: acc.invalid_dropped,
+                duplicate_stamps,
+                geodetic_origin,
+            })
+        })
+        .collect();
+    // In request order; a topic requested twice is cloned.
+    let mut topics_out = Vec::with_capacity(topics.len());
+    for t in topics {
+        let i = unique.iter().position(|u| u == t).unwrap_or(0);
+        let first = done[i].take();
+        let next = match first {
+            Some(x) => x,
+            None => match topics_out.iter().find(|x: &&ExtractedTopic| &x.topic == t) {
+                Some(x) => x.clone(),
+                None => continue,
+            },
+        };
+        topics_out.push(next);
+    }
+    Ok(Extraction {
+        topics: topics_out,
+        warnings,
+    })
+}
