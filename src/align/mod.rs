@@ -5,3 +5,6 @@ pub mod grid;
 pub mod speed;
 pub mod time_offset;
 pub mod xcorr;
+pub mod auto_offset;
+pub mod auto_params;
+pub mod clock_drift;

@@ -45,6 +45,14 @@ pub enum OffsetMethod {
     Curvature,
     /// The windowed speed profile (the baseline; blind at constant speed).
     Speed,
+    /// The signed curvature in the horizontal plane (counter-clockwise positive), mean-removed NCC:
+    /// a turn left and a turn right no longer look alike, and noise averages to zero instead of
+    /// correlating positively as unsigned κ does.
+    #[serde(rename = "signed-curvature")]
+    SignedCurvature,
+    /// Runs `speed`, `signed-curvature` and `curvature` and applies a consistent, confident answer
+    /// (see [`crate::align::auto_offset`]).
+    Auto,
 }
 
 impl OffsetMethod {
@@ -53,6 +61,8 @@ impl OffsetMethod {
         match self {
             OffsetMethod::Curvature => "curvature",
             OffsetMethod::Speed => "speed",
+            OffsetMethod::SignedCurvature => "signed-curvature",
+            OffsetMethod::Auto => "auto",
         }
     }
 }
@@ -72,8 +82,11 @@ pub struct OffsetParams {
     /// Window of the speed profile, seconds (see [`crate::align::speed`]).
     pub speed_window_s: f64,
     /// Whether the `speed` NCC removes the mean over the overlap (Pearson). The curvature NCC is
-    /// always eq. (2), not mean-removed.
+    /// always eq. (2), not mean-removed; the signed curvature's always is.
     pub speed_mean_removed: bool,
+    /// The largest gap interpolated across on the grid and bridged by a speed chord, seconds;
+    /// `None`: `curvature.dt_max_s` (a long Δt_max for slow robots should not bridge an outage).
+    pub max_gap_s: Option<f64>,
 }
 
 impl Default for OffsetParams {
@@ -85,6 +98,7 @@ impl Default for OffsetParams {
             curvature: CurvatureParams::default(),
             speed_window_s: 2.0,
             speed_mean_removed: true,
+            max_gap_s: None,
         }
     }
 }
@@ -114,6 +128,13 @@ pub struct OffsetEstimate {
     pub status: OffsetStatus,
     /// Overlap at the peak over the defined points of the shorter signal (coarse grid).
     pub overlap_fraction: f64,
+    /// ρ − ρ₂: how far the peak NCC stands above the best NCC outside its main lobe (0 when nothing
+    /// lies outside the lobe).
+    pub margin: f64,
+    /// Δt of that best rival outside the main lobe, seconds.
+    pub rival_offset_s: Option<f64>,
+    /// Share of the two trajectories' time overlap (at the peak) where both signals are defined.
+    pub defined_fraction: f64,
 }
 
 /// Lags whose overlap is below this share of the best overlap are not eligible for the peak: an NCC
@@ -127,6 +148,17 @@ const OVERLAP_FULL: f64 = 0.5;
 const MIN_CONFIDENCE: f64 = 0.5;
 /// The least peak NCC reported as `ok`.
 const MIN_CORRELATION: f64 = 0.3;
+/// Defined share of the overlap that counts as full support (κ is undefined while standing still or
+/// slower than ε/Δt_max; a quarter of the mission still gives a usable signature).
+const DEFINED_FULL: f64 = 0.25;
+/// Least half-width of the main lobe excluded around the peak, curvature methods, seconds.
+const MIN_LOBE_CURVATURE_S: f64 = 1.0;
+/// Least half-width of the main lobe excluded around the peak, speed (its lobes are 5–20 s wide),
+/// seconds.
+const MIN_LOBE_SPEED_S: f64 = 3.0;
+/// The descent from the peak counted as its main lobe stops this far out, seconds (the widest lobes
+/// seen, those of speed, are 5–20 s wide).
+const MAX_LOBE_S: f64 = 20.0;
 /// Fine refinement window, in coarse steps on each side of the coarse peak.
 const FINE_WINDOW_COARSE_STEPS: f64 = 2.0;
 /// Fine-grid points processed per block (bounds the buffers on long missions).
@@ -143,14 +175,25 @@ pub fn estimate_time_offset(
     params: &OffsetParams,
 ) -> Result<OffsetEstimate> {
     check_params(params)?;
+    if method == OffsetMethod::Auto {
+        return crate::align::auto_offset::auto_time_offset(ref_t, ref_p, est_t, est_p, params)
+            .map(|a| a.estimate);
+    }
+    let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
     let signal = |t: &[f64], p: &[Vector3<f64>], what: &str| -> Result<(Vec<f64>, Vec<f64>)> {
         let s: (Vec<f64>, Vec<f64>) = match method {
             OffsetMethod::Curvature => curvature_signature(t, p, &params.curvature)
                 .into_iter()
                 .map(|s| (s.t, s.curvature))
                 .unzip(),
+            OffsetMethod::SignedCurvature | OffsetMethod::Auto => {
+                curvature_signature(t, p, &params.curvature)
+                    .into_iter()
+                    .map(|s| (s.t, s.signed_curvature()))
+                    .unzip()
+            }
             OffsetMethod::Speed => {
-                speed_profile(t, p, params.speed_window_s, params.curvature.dt_max_s)
+                speed_profile(t, p, params.speed_window_s, gap)
                     .into_iter()
                     .map(|s| (s.t, s.speed))
                     .unzip()
@@ -169,6 +212,7 @@ pub fn estimate_time_offset(
     let (et, ev) = signal(est_t, est_p, "estimate")?;
     let centering = match method {
         OffsetMethod::Speed if params.speed_mean_removed => Centering::MeanRemoved,
+        OffsetMethod::SignedCurvature | OffsetMethod::Auto => Centering::MeanRemoved,
         _ => Centering::Raw,
     };
     let no_overlap = || Error::NoOverlap {
@@ -179,7 +223,6 @@ pub fn estimate_time_offset(
         ref_end: rt[rt.len() - 1],
         offset: params.max_offset_s,
     };
-    let gap = params.curvature.dt_max_s;
 
     // Coarse stage: lag k pairs est grid point n with ref grid point n + k, i.e. Δt = k·h.
     let h = params.coarse_grid_s;
@@ -216,7 +259,17 @@ pub fn estimate_time_offset(
     };
     let coarse_offset = (coarse.lag(i_peak) - shift) as f64 * h;
     let overlap_fraction = coarse.overlap[i_peak] as f64 / e_def.min(r_def) as f64;
-    let (separation, prominence) = peak_separation(&coarse.ncc, &eligible, i_peak, h);
+    // Share of the time both trajectories overlap (at the peak) where both signals are defined.
+    let span = (rt[rt.len() - 1].min(et[et.len() - 1] + coarse_offset)
+        - rt[0].max(et[0] + coarse_offset))
+    .max(h);
+    let defined_fraction = (coarse.overlap[i_peak] as f64 * h / span).clamp(0.0, 1.0);
+    let min_lobe_s = match method {
+        OffsetMethod::Speed => MIN_LOBE_SPEED_S.max(params.speed_window_s),
+        _ => MIN_LOBE_CURVATURE_S,
+    };
+    let lobe = peak_separation(&coarse.ncc, &eligible, i_peak, h, min_lobe_s);
+    let (separation, prominence) = (lobe.separation, lobe.prominence);
     let at_edge = i_peak == 0 || i_peak + 1 == coarse.len();
 
     // Fine stage around the coarse peak.
@@ -247,7 +300,8 @@ pub fn estimate_time_offset(
 
     let confidence = (separation
         * (prominence / PROMINENCE_FULL).clamp(0.0, 1.0)
-        * (overlap_fraction / OVERLAP_FULL).clamp(0.0, 1.0))
+        * (overlap_fraction / OVERLAP_FULL).clamp(0.0, 1.0)
+        * (defined_fraction / DEFINED_FULL).clamp(0.0, 1.0))
     .clamp(0.0, 1.0);
     let status = if confidence >= MIN_CONFIDENCE && peak >= MIN_CORRELATION && !at_edge {
         OffsetStatus::Ok
@@ -261,6 +315,11 @@ pub fn estimate_time_offset(
         confidence,
         status,
         overlap_fraction,
+        margin: lobe.margin,
+        rival_offset_s: lobe
+            .rival
+            .map(|i| (coarse.lag(i) - shift) as f64 * h),
+        defined_fraction,
     })
 }
 
@@ -279,6 +338,9 @@ fn check_params(p: &OffsetParams) -> Result<()> {
     positive(p.coarse_grid_s, "coarse grid step")?;
     positive(p.speed_window_s, "speed window")?;
     positive(p.curvature.dt_max_s, "dt_max")?;
+    if let Some(g) = p.max_gap_s {
+        positive(g, "max gap")?;
+    }
     if p.grid_s > p.coarse_grid_s {
         return Err(Error::InvalidArgument(format!(
             "time offset: the grid step ({} s) must not exceed the coarse grid step ({} s)",
@@ -288,16 +350,37 @@ fn check_params(p: &OffsetParams) -> Result<()> {
     Ok(())
 }
 
+/// The peak against the rest of the NCC curve (see the module doc).
+struct Lobe {
+    /// (ρ − ρ₂)/P in [0, 1].
+    separation: f64,
+    /// P = ρ − median.
+    prominence: f64,
+    /// ρ − ρ₂ (0 without a rival).
+    margin: f64,
+    /// Index of the best lag outside the main lobe.
+    rival: Option<usize>,
+}
+
 /// Separation of the peak from its best rival outside the main lobe, and the peak's prominence over
-/// the median (see the module doc).
-fn peak_separation(ncc: &[f64], eligible: &[usize], i_peak: usize, step: f64) -> (f64, f64) {
+/// the median (see the module doc). The main lobe is the union of (a) the run above half prominence
+/// widened by its own width on each side and (b) the descent from the peak to the first real
+/// minimum on each side (ripples below 5 % of P are walked through; at most 20 s), and is at least
+/// ±`min_lobe_s`: the broad shoulders of a speed correlation are not rivals.
+fn peak_separation(ncc: &[f64], eligible: &[usize], i_peak: usize, step: f64, min_lobe_s: f64) -> Lobe {
+    let weak = |prominence: f64| Lobe {
+        separation: 0.0,
+        prominence,
+        margin: 0.0,
+        rival: None,
+    };
     let mut vals: Vec<f64> = eligible.iter().map(|&i| ncc[i]).collect();
     vals.sort_by(f64::total_cmp);
     let median = vals[vals.len() / 2];
     let rho = ncc[i_peak];
     let prominence = rho - median;
     if prominence.is_nan() || prominence <= 0.0 {
-        return (0.0, 0.0);
+        return weak(0.0);
     }
     let half = median + 0.5 * prominence;
     let (mut a, mut b) = (i_peak, i_peak);
@@ -307,19 +390,39 @@ fn peak_separation(ncc: &[f64], eligible: &[usize], i_peak: usize, step: f64) ->
     while b + 1 < ncc.len() && ncc[b + 1] >= half {
         b += 1;
     }
-    let width = (b - a + 1).max((1.0 / step).ceil() as usize);
-    let lo = a.saturating_sub(width);
-    let hi = b + width;
+    let width = (b - a + 1).max((min_lobe_s / step).ceil() as usize);
+    let mut lo = a.saturating_sub(width);
+    let mut hi = b + width;
+    // The descent to the first minimum on each side, tracking the lowest value seen so far.
+    let ripple = 0.05 * prominence;
+    let reach = (MAX_LOBE_S / step).ceil() as usize;
+    let (mut low, mut k) = (rho, i_peak);
+    while k > 0 && i_peak - k < reach && ncc[k - 1] <= low + ripple {
+        k -= 1;
+        low = low.min(ncc[k]);
+    }
+    lo = lo.min(k);
+    let (mut low, mut k) = (rho, i_peak);
+    while k + 1 < ncc.len() && k - i_peak < reach && ncc[k + 1] <= low + ripple {
+        k += 1;
+        low = low.min(ncc[k]);
+    }
+    hi = hi.max(k);
     let rival = eligible
         .iter()
-        .filter(|&&i| i < lo || i > hi)
-        .map(|&i| ncc[i])
-        .fold(f64::NEG_INFINITY, f64::max);
-    if rival == f64::NEG_INFINITY {
+        .copied()
+        .filter(|&i| i < lo || i > hi)
+        .max_by(|&x, &y| ncc[x].total_cmp(&ncc[y]));
+    let Some(r) = rival else {
         // Nothing outside the lobe to compare with: the peak is not shown to be unique.
-        return (0.0, prominence);
+        return weak(prominence);
+    };
+    Lobe {
+        separation: ((rho - ncc[r]) / prominence).clamp(0.0, 1.0),
+        prominence,
+        margin: rho - ncc[r],
+        rival: Some(r),
     }
-    (((rho - rival) / prominence).clamp(0.0, 1.0), prominence)
 }
 
 /// Overlap sums at the fine lags `lo..=hi` (Δt = k·hf) by direct summation, streaming the estimate's

@@ -24,8 +24,12 @@ pub enum Command {
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum PlatformArg {
+    /// the paper's ε 0.1 m, Δt_max as --dt-max
     Legged,
+    /// the paper's ε 0.3 m, Δt_max as --dt-max
     Wheeled,
+    /// ε and the curvature Δt_max from the reference's measured noise and speed
+    Auto,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -38,8 +42,14 @@ pub enum StampArg {
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum OffsetMethodArg {
+    /// unsigned curvature, eq. (2) (the paper)
     Curvature,
+    /// windowed speed profile (blind at constant speed)
     Speed,
+    /// signed horizontal curvature, mean-removed NCC
+    SignedCurvature,
+    /// run them all, apply a confident and consistent answer
+    Auto,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -72,8 +82,8 @@ pub struct EvalArgs {
     /// ENU origin for NavSatFix topics: lat,lon,h (default: the first valid fix).
     #[arg(long, value_name = "LAT,LON,H", allow_hyphen_values = true)]
     pub origin: Option<String>,
-    /// Platform: sets the paper's ε_min (legged 0.1 m, wheeled 0.3 m).
-    #[arg(long, value_enum, default_value = "legged")]
+    /// Platform: the paper's ε_min (legged 0.1 m, wheeled 0.3 m), or auto: measured on the reference.
+    #[arg(long, value_enum, default_value = "auto")]
     pub platform: PlatformArg,
     /// ε_min for both curvature and path length (the paper's single ε), metres.
     #[arg(long, value_name = "M")]
@@ -87,9 +97,10 @@ pub struct EvalArgs {
     /// θ_max: turning angles above it are discontinuities, radians.
     #[arg(long, value_name = "RAD", default_value_t = std::f64::consts::FRAC_PI_2)]
     pub theta_max: f64,
-    /// Δt_max: a chord slower than this marks a stationary robot or a gap, seconds.
-    #[arg(long, value_name = "S", default_value_t = 2.0)]
-    pub dt_max: f64,
+    /// Δt_max: a chord slower than this marks a stationary robot or a gap, seconds [default: 2 for
+    /// gaps and standstills; the curvature's from the robot's speed with --platform auto].
+    #[arg(long, value_name = "S")]
+    pub dt_max: Option<f64>,
     /// Drift Error window sizes, metres of reference path (comma-separated).
     #[arg(
         long,
@@ -108,7 +119,7 @@ pub struct EvalArgs {
     #[arg(long, value_name = "M", default_value_t = 0.1)]
     pub lever_arm: f64,
     /// Time-offset method applied.
-    #[arg(long, value_enum, default_value = "curvature")]
+    #[arg(long, value_enum, default_value = "auto")]
     pub offset_method: OffsetMethodArg,
     /// Largest offset searched, seconds (GPS time and UTC alone differ by 18 s).
     #[arg(long, value_name = "S", default_value_t = 30.0)]
@@ -176,6 +187,9 @@ pub struct SimulateArgs {
     /// Replace an existing output.
     #[arg(long)]
     pub force: bool,
+    /// Clock rate error of the estimate, ppm (positive: its clock runs fast).
+    #[arg(long, value_name = "PPM", default_value_t = 0.0, allow_hyphen_values = true)]
+    pub clock_drift_ppm: f64,
 }
 
 /// Parses `a,b,c` into three numbers.

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use crate::align::auto_params::AutoParams;
 use crate::align::curvature::CurvatureParams;
 use crate::align::time_offset::{OffsetMethod, OffsetParams};
 use crate::error::{Error, Result};
@@ -10,14 +11,18 @@ use crate::metrics::drift_error::DriftParams;
 use crate::metrics::lever::LeverCorrection;
 use crate::sources::StampSource;
 
-/// The kind of robot: it sets the paper's default ε_min (about 3σ of the reference noise it expects).
+/// The kind of robot: it sets the paper's default ε_min (about 3σ of the reference noise it expects),
+/// or `Auto`: ε and the curvature Δt_max chosen from the reference's measured noise and speed
+/// ([`crate::align::auto_params`]), the default.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Platform {
     /// Legged robots: ε_min 0.1 m.
-    #[default]
     Legged,
     /// Wheeled robots: ε_min 0.3 m.
     Wheeled,
+    /// Parameters from the data (the default): see [`EvalConfig::resolved`].
+    #[default]
+    Auto,
 }
 
 impl Platform {
@@ -26,6 +31,8 @@ impl Platform {
         match self {
             Platform::Legged => 0.1,
             Platform::Wheeled => 0.3,
+            // Only a fallback: `evaluate` replaces it with the value measured on the reference.
+            Platform::Auto => 0.1,
         }
     }
 
@@ -34,6 +41,7 @@ impl Platform {
         match self {
             Platform::Legged => "legged",
             Platform::Wheeled => "wheeled",
+            Platform::Auto => "auto",
         }
     }
 }
@@ -125,6 +133,10 @@ pub struct EvalConfig {
     /// sample when below 1e8 (no recording is that close to 1970).
     pub t_start: Option<f64>,
     pub t_end: Option<f64>,
+    /// Δt_max of the curvature signatures (time offset and the lever-arm radii), seconds; `None`:
+    /// `dt_max_s` with a platform, measured with `Platform::Auto`. `dt_max_s` stays the bound on gaps
+    /// and standstills.
+    pub curvature_dt_max_s: Option<f64>,
 }
 
 impl EvalConfig {
@@ -140,7 +152,7 @@ impl EvalConfig {
             estimates,
             stamp: StampSource::Header,
             origin: None,
-            platform: Platform::Legged,
+            platform: Platform::Auto,
             eps_min_m: None,
             curvature_eps_m: None,
             path_eps_m: None,
@@ -150,13 +162,60 @@ impl EvalConfig {
             overlap: 0.0,
             lever_correction: LeverCorrection::Paper,
             lever_arm_m: 0.1,
-            offset_method: OffsetMethod::Curvature,
+            offset_method: OffsetMethod::Auto,
             max_offset_s: 30.0,
             grid_s: 0.001,
             time_offset_s: None,
             t_start: None,
             t_end: None,
+            curvature_dt_max_s: None,
         }
+    }
+
+    /// Whether any parameter is left to be measured on the reference (`Platform::Auto` and not
+    /// given).
+    pub fn needs_auto(&self) -> bool {
+        self.platform == Platform::Auto
+            && (self.curvature_eps_m.or(self.eps_min_m).is_none()
+                || self.path_eps_m.or(self.eps_min_m).is_none()
+                || self.curvature_dt_max_s.is_none())
+    }
+
+    /// Names of the parameters `resolved` takes from `auto` (those not given).
+    pub fn auto_parameter_names(&self) -> Vec<String> {
+        if self.platform != Platform::Auto {
+            return Vec::new();
+        }
+        let mut v = Vec::new();
+        if self.curvature_eps_m.or(self.eps_min_m).is_none() {
+            v.push("curvature_eps_m".to_string());
+        }
+        if self.path_eps_m.or(self.eps_min_m).is_none() {
+            v.push("path_eps_m".to_string());
+        }
+        if self.curvature_dt_max_s.is_none() {
+            v.push("curvature_dt_max_s".to_string());
+        }
+        v
+    }
+
+    /// This request with every parameter left to `Platform::Auto` set from `auto` (explicit values
+    /// are kept as given).
+    pub fn resolved(&self, auto: &AutoParams) -> EvalConfig {
+        let mut c = self.clone();
+        if self.platform != Platform::Auto {
+            return c;
+        }
+        if c.curvature_eps_m.or(c.eps_min_m).is_none() {
+            c.curvature_eps_m = Some(auto.curvature_eps_m);
+        }
+        if c.path_eps_m.or(c.eps_min_m).is_none() {
+            c.path_eps_m = Some(auto.path_eps_m);
+        }
+        if c.curvature_dt_max_s.is_none() {
+            c.curvature_dt_max_s = Some(auto.curvature_dt_max_s);
+        }
+        c
     }
 
     /// ε for curvature: `--curvature-eps`, else `--eps-min`, else the platform's.
@@ -178,7 +237,7 @@ impl EvalConfig {
         CurvatureParams {
             eps_m: self.curvature_eps(),
             theta_max_rad: self.theta_max_rad,
-            dt_max_s: self.dt_max_s,
+            dt_max_s: self.curvature_dt_max_s.unwrap_or(self.dt_max_s),
         }
     }
 
@@ -188,6 +247,7 @@ impl EvalConfig {
             max_offset_s: self.max_offset_s,
             grid_s: self.grid_s,
             curvature: self.curvature_params(),
+            max_gap_s: Some(self.dt_max_s),
             ..OffsetParams::default()
         }
     }
@@ -238,6 +298,9 @@ impl EvalConfig {
         positive("--path-eps", self.path_eps())?;
         positive("--theta-max", self.theta_max_rad)?;
         positive("--dt-max", self.dt_max_s)?;
+        if let Some(v) = self.curvature_dt_max_s {
+            positive("--dt-max", v)?;
+        }
         positive("--max-offset", self.max_offset_s)?;
         positive("--grid", self.grid_s)?;
         if self.lever_arm_m.is_nan() || self.lever_arm_m < 0.0 {
@@ -291,6 +354,7 @@ mod tests {
             NamedInput::file("r.tum"),
             vec![NamedInput::file("e.tum")],
         );
+        c.platform = Platform::Legged;
         assert_eq!(c.curvature_eps(), 0.1);
         c.platform = Platform::Wheeled;
         assert_eq!(c.path_eps(), 0.3);

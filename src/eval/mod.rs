@@ -6,11 +6,14 @@ pub mod inputs;
 
 use rayon::prelude::*;
 
-use crate::align::time_offset::{estimate_time_offset, OffsetEstimate, OffsetMethod, OffsetStatus};
+use crate::align::auto_offset::auto_time_offset;
+use crate::align::auto_params::auto_params;
+use crate::align::clock_drift::clock_drift;
+use crate::align::time_offset::{OffsetEstimate, OffsetMethod, OffsetStatus};
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult};
 use crate::report::json::{
-    DriftErrorReport, EstimateReport, Input, OffsetMethodReport, Parameters, Report,
+    AutoParameters, DriftErrorReport, EstimateReport, Input, OffsetMethodReport, Parameters, Report,
     TimeOffsetReport, Tool, TopicReport, WindowReport, SCHEMA_VERSION,
 };
 use crate::sources::{Progress, Warning};
@@ -18,7 +21,7 @@ use config::EvalConfig;
 use inputs::{load, Loaded};
 
 /// Every method the offset search runs (the applied one is `EvalConfig::offset_method`).
-pub const OFFSET_METHODS: [OffsetMethod; 2] = [OffsetMethod::Curvature, OffsetMethod::Speed];
+pub const OFFSET_METHODS: [OffsetMethod; 3] = crate::align::auto_offset::AUTO_METHODS;
 
 /// Runs the whole evaluation. Warnings the user must see (a weak offset, a truncated recording) are in
 /// `Report::warnings`; the CLI exits with code 3 when there is any.
@@ -43,6 +46,15 @@ pub fn evaluate(config: &EvalConfig, progress: Progress<'_>) -> Result<Report> {
     for e in &inputs.estimates {
         require_samples(&inputs.path, e)?;
     }
+    // `--platform auto`: ε and the curvature Δt_max from the reference's own noise and speed.
+    let auto = {
+        let t = reference.trajectory.times_s(t0_ns);
+        let min_window = config.windows_m.iter().copied().fold(f64::INFINITY, f64::min);
+        auto_params(&t, &reference.trajectory.positions, min_window, config.dt_max_s)
+    };
+    let auto_names = config.auto_parameter_names();
+    let resolved = config.resolved(&auto);
+    let config = &resolved;
 
     let results: Vec<Result<(EstimateReport, Vec<Warning>)>> = inputs
         .estimates
@@ -85,6 +97,15 @@ pub fn evaluate(config: &EvalConfig, progress: Progress<'_>) -> Result<Report> {
             origin: config.origin,
             t_start: to_s(crop_start),
             t_end: to_s(crop_end),
+            curvature_dt_max_s: config.curvature_dt_max_s,
+            reference_noise_m: auto.reference_noise_m,
+            auto: (!auto_names.is_empty()).then(|| AutoParameters {
+                chosen: auto_names.clone(),
+                reference_noise_m: auto.reference_noise_m,
+                mean_speed_mps: auto.mean_speed_mps,
+                slow_speed_mps: auto.slow_speed_mps,
+                rules: "curvature_eps = sqrt(sigma / 0.005 m^-1) in [0.1, 5] m; path_eps = 50 sigma in [0.1, min window / 5] m; curvature_dt_max = 1.5 curvature_eps / slow speed in [dt_max, 30] s".into(),
+            }),
         },
         reference: TopicReport {
             topic: reference.label.clone(),
@@ -125,6 +146,8 @@ fn method_report(method: OffsetMethod, r: &Result<OffsetEstimate>) -> OffsetMeth
             confidence: Some(o.confidence),
             status: status_str(o.status).into(),
             error: None,
+            margin: Some(o.margin),
+            defined_fraction: Some(o.defined_fraction),
         },
         Err(e) => OffsetMethodReport {
             method: method.as_str().into(),
@@ -133,6 +156,8 @@ fn method_report(method: OffsetMethod, r: &Result<OffsetEstimate>) -> OffsetMeth
             confidence: None,
             status: "failed".into(),
             error: Some(e.to_string()),
+            margin: None,
+            defined_fraction: None,
         },
     }
 }
@@ -159,58 +184,97 @@ fn evaluate_estimate(
             confidence: None,
             status: "given".into(),
             methods: Vec::new(),
+            reason: Some("given with --time-offset".into()),
+            implied_lever_arm_m: None,
+            first_third_s: None,
+            last_third_s: None,
+            drift_ppm: None,
         },
         None => {
             let params = config.offset_params();
-            let runs: Vec<(OffsetMethod, Result<OffsetEstimate>)> = OFFSET_METHODS
-                .par_iter()
-                .map(|&m| {
-                    (
-                        m,
-                        estimate_time_offset(m, &ref_t, ref_p, &est_t, est_p, &params),
-                    )
-                })
-                .collect();
-            let chosen = runs
-                .iter()
-                .find(|(m, _)| *m == config.offset_method)
-                .map(|(_, r)| r);
-            let methods = runs.iter().map(|(m, r)| method_report(*m, r)).collect();
+            let auto = match auto_time_offset(&ref_t, ref_p, &est_t, est_p, &params) {
+                Ok(a) => a,
+                Err(e @ Error::NoOverlap { .. }) => return Err(clone_no_overlap(&e, &est.label)),
+                Err(e) => return Err(relabel(e, &est.label)),
+            };
+            let methods = auto.runs.iter().map(|(m, r)| method_report(*m, r)).collect();
+            // The answer of the requested method (`auto`: the combined one) and why.
+            let (chosen, reason, implied_lever) = if config.offset_method == OffsetMethod::Auto {
+                warnings.extend(auto.warnings.iter().map(|w| Warning {
+                    code: w.code.clone(),
+                    message: format!("{}: {}", est.name, w.message),
+                }));
+                (
+                    Some(Ok(auto.estimate)),
+                    auto.decision.reason.clone(),
+                    auto.decision.implied_lever_arm_m,
+                )
+            } else {
+                let r = auto
+                    .runs
+                    .iter()
+                    .find(|(m, _)| *m == config.offset_method)
+                    .map(|(_, r)| r.as_ref().map(|o| *o));
+                (r, format!("--offset-method {}", config.offset_method.as_str()), None)
+            };
             match chosen {
-                Some(Ok(o)) if o.status == OffsetStatus::Ok => TimeOffsetReport {
-                    method: o.method.as_str().into(),
-                    offset_s: o.offset_s,
-                    applied_s: o.offset_s,
-                    correlation: Some(o.correlation),
-                    confidence: Some(o.confidence),
-                    status: "ok".into(),
-                    methods,
-                },
+                Some(Ok(o)) if o.status == OffsetStatus::Ok => {
+                    let drift = clock_drift(
+                        o.method, &ref_t, ref_p, &est_t, est_p, &params, o.offset_s,
+                    );
+                    TimeOffsetReport {
+                        method: o.method.as_str().into(),
+                        offset_s: o.offset_s,
+                        applied_s: o.offset_s,
+                        correlation: Some(o.correlation),
+                        confidence: Some(o.confidence),
+                        status: "ok".into(),
+                        methods,
+                        reason: Some(reason),
+                        implied_lever_arm_m: implied_lever,
+                        first_third_s: drift.map(|d| d.first_third_s),
+                        last_third_s: drift.map(|d| d.last_third_s),
+                        drift_ppm: drift.map(|d| d.drift_ppm),
+                    }
+                }
                 Some(Err(e @ Error::NoOverlap { .. })) => {
                     return Err(clone_no_overlap(e, &est.label))
                 }
                 other => {
-                    let (offset_s, correlation, confidence) = match other {
-                        Some(Ok(o)) => (o.offset_s, Some(o.correlation), Some(o.confidence)),
-                        _ => (0.0, None, None),
+                    let (method, offset_s, correlation, confidence) = match other {
+                        Some(Ok(o)) => (
+                            o.method.as_str(),
+                            o.offset_s,
+                            Some(o.correlation),
+                            Some(o.confidence),
+                        ),
+                        _ => (config.offset_method.as_str(), 0.0, None, None),
+                    };
+                    let hint = if config.offset_method == OffsetMethod::Auto {
+                        format!("{}. Check the overlap or give --time-offset", reason)
+                    } else {
+                        "Check the overlap, try --offset-method auto or give --time-offset".into()
                     };
                     warnings.push(Warning {
                         code: "weak_time_offset".into(),
                         message: format!(
-                            "{}: the {} time-offset peak is weak (best {:+.3} s); Drift Error computed at 0 s. Check the overlap, try --offset-method speed or give --time-offset",
-                            est.name,
-                            config.offset_method.as_str(),
-                            offset_s
+                            "{}: the {} time-offset peak is weak (best {:+.3} s); Drift Error computed at 0 s. {}",
+                            est.name, method, offset_s, hint
                         ),
                     });
                     TimeOffsetReport {
-                        method: config.offset_method.as_str().into(),
+                        method: method.into(),
                         offset_s,
                         applied_s: 0.0,
                         correlation,
                         confidence,
                         status: "weak".into(),
                         methods,
+                        reason: Some(reason),
+                        implied_lever_arm_m: implied_lever,
+                        first_third_s: None,
+                        last_third_s: None,
+                        drift_ppm: None,
                     }
                 }
             }

@@ -69,6 +69,29 @@ pub struct Parameters {
     /// The crop, absolute seconds on the reference clock.
     pub t_start: Option<f64>,
     pub t_end: Option<f64>,
+    /// Δt_max of the curvature signatures, seconds (`dt_max_s` bounds gaps and standstills).
+    #[serde(default)]
+    pub curvature_dt_max_s: Option<f64>,
+    /// σ of the reference's white position noise, measured, metres.
+    #[serde(default)]
+    pub reference_noise_m: Option<f64>,
+    /// What `--platform auto` chose and from what (absent with a platform).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub auto: Option<AutoParameters>,
+}
+
+/// The parameters measured on the reference (`--platform auto`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AutoParameters {
+    /// The parameters taken from the data (the others were given).
+    pub chosen: Vec<String>,
+    /// σ they came from, metres.
+    pub reference_noise_m: Option<f64>,
+    /// Mean and 10th percentile of the reference's speed while moving, m/s.
+    pub mean_speed_mps: Option<f64>,
+    pub slow_speed_mps: Option<f64>,
+    /// The rules, in words.
+    pub rules: String,
 }
 
 /// The reference side.
@@ -114,6 +137,20 @@ pub struct TimeOffsetReport {
     pub status: String,
     /// Every method that ran.
     pub methods: Vec<OffsetMethodReport>,
+    /// Why this answer was applied (or none).
+    #[serde(default)]
+    pub reason: Option<String>,
+    /// v·(Δt_signed-curvature − Δt_speed) when both were confident and disagreed, metres.
+    #[serde(default)]
+    pub implied_lever_arm_m: Option<f64>,
+    /// Δt on the first and the last third of the overlap, seconds, and the clock drift they imply,
+    /// ppm (positive: the estimate's clock runs fast, Δt shrinks with time).
+    #[serde(default)]
+    pub first_third_s: Option<f64>,
+    #[serde(default)]
+    pub last_third_s: Option<f64>,
+    #[serde(default)]
+    pub drift_ppm: Option<f64>,
 }
 
 /// One time-offset method's answer.
@@ -127,6 +164,12 @@ pub struct OffsetMethodReport {
     pub status: String,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub error: Option<String>,
+    /// ρ − ρ₂: the peak over the best NCC outside its main lobe.
+    #[serde(default)]
+    pub margin: Option<f64>,
+    /// Share of the overlap where both signals are defined.
+    #[serde(default)]
+    pub defined_fraction: Option<f64>,
 }
 
 /// Drift Error at one window size.

@@ -35,6 +35,10 @@ pub struct MissionConfig {
     pub time_offset_s: f64,
     /// The estimate's distance scale error (0.02 = 2 % too long).
     pub scale_error: f64,
+    /// The estimate's clock rate error, ppm: its stamps read
+    /// t0 + (t_true − t0)·(1 + ppm·10⁻⁶) − time_offset (t0 = `start_time_ns`), so Δt falls by ppm µs
+    /// per second.
+    pub clock_drift_ppm: f64,
 }
 
 impl Default for MissionConfig {
@@ -52,6 +56,7 @@ impl Default for MissionConfig {
             est_lever_m: [0.0, 0.3, 0.0],
             time_offset_s: 0.2,
             scale_error: 0.02,
+            clock_drift_ppm: 0.0,
         }
     }
 }
@@ -135,7 +140,8 @@ pub fn simulate(config: &MissionConfig, route: &[Segment]) -> Mission {
         let (p, r) = sensor(t_true, &est_lever);
         let local = r0.inverse() * (p - p0) * (1.0 + config.scale_error);
         let noise = white(&mut rng, config.est_noise_m);
-        let stamp = config.start_time_ns + ((t_true - config.time_offset_s) * 1e9).round() as i64;
+        let t_clock = t_true * (1.0 + config.clock_drift_ppm * 1e-6);
+        let stamp = config.start_time_ns + ((t_clock - config.time_offset_s) * 1e9).round() as i64;
         estimate.push(stamp, local + noise, Some(r0.inverse() * r));
     }
     Mission {

@@ -42,12 +42,16 @@ pub fn config_from_args(a: &EvalArgs) -> Result<EvalConfig> {
     c.platform = match a.platform {
         PlatformArg::Legged => Platform::Legged,
         PlatformArg::Wheeled => Platform::Wheeled,
+        PlatformArg::Auto => Platform::Auto,
     };
     c.eps_min_m = a.eps_min;
     c.curvature_eps_m = a.curvature_eps;
     c.path_eps_m = a.path_eps;
     c.theta_max_rad = a.theta_max;
-    c.dt_max_s = a.dt_max;
+    if let Some(v) = a.dt_max {
+        c.dt_max_s = v;
+        c.curvature_dt_max_s = Some(v);
+    }
     c.windows_m = a.window.clone();
     c.overlap = a.overlap;
     c.lever_correction = match a.lever_correction {
@@ -58,6 +62,8 @@ pub fn config_from_args(a: &EvalArgs) -> Result<EvalConfig> {
     c.offset_method = match a.offset_method {
         OffsetMethodArg::Curvature => OffsetMethod::Curvature,
         OffsetMethodArg::Speed => OffsetMethod::Speed,
+        OffsetMethodArg::SignedCurvature => OffsetMethod::SignedCurvature,
+        OffsetMethodArg::Auto => OffsetMethod::Auto,
     };
     c.max_offset_s = a.max_offset;
     c.grid_s = a.grid;

@@ -23,6 +23,7 @@ pub fn run(a: SimulateArgs) -> Result<u8> {
         time_offset_s: a.time_offset,
         scale_error: a.scale_error,
         est_lever_m: parse_triple("--lever", &a.lever).map_err(|e| anyhow!(e))?,
+        clock_drift_ppm: a.clock_drift_ppm,
         ..MissionConfig::default()
     };
     let route: Vec<_> = std::iter::repeat_n(default_route(), a.laps.max(1))
