@@ -125,6 +125,9 @@ pub struct EvalConfig {
     /// sample when below 1e8 (no recording is that close to 1970).
     pub t_start: Option<f64>,
     pub t_end: Option<f64>,
+    /// `--export-aligned FILE`: write each estimate, shifted onto the reference clock, as TUM
+    /// (see [`super::export::aligned_path`] for the names with several estimates).
+    pub export_aligned: Option<PathBuf>,
 }
 
 impl EvalConfig {
@@ -156,6 +159,7 @@ impl EvalConfig {
             time_offset_s: None,
             t_start: None,
             t_end: None,
+            export_aligned: None,
         }
     }
 
