@@ -57,6 +57,8 @@ pub enum LeverCorrectionArg {
     /// α = r_ref/r_est where |r_est − r_ref| ≤ a (the paper)
     Paper,
     None,
+    /// fit s and the lateral lever d of L_est = s·(L_ref − d·Δψ) over all windows, correct by d
+    Fit,
 }
 
 #[derive(Debug, Args)]
@@ -142,6 +144,10 @@ pub struct EvalArgs {
     /// Print nothing but errors and warnings.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Write the estimate shifted onto the reference clock (as evaluated) as TUM, for evo. With several
+    /// estimates the name goes before the extension: FILE.tum → FILE.NAME.tum.
+    #[arg(long, value_name = "FILE")]
+    pub export_aligned: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]

@@ -137,6 +137,9 @@ pub struct EvalConfig {
     /// `dt_max_s` with a platform, measured with `Platform::Auto`. `dt_max_s` stays the bound on gaps
     /// and standstills.
     pub curvature_dt_max_s: Option<f64>,
+    /// `--export-aligned FILE`: write each estimate, shifted onto the reference clock, as TUM
+    /// (see [`super::export::aligned_path`] for the names with several estimates).
+    pub export_aligned: Option<PathBuf>,
 }
 
 impl EvalConfig {
@@ -169,6 +172,7 @@ impl EvalConfig {
             t_start: None,
             t_end: None,
             curvature_dt_max_s: None,
+            export_aligned: None,
         }
     }
 

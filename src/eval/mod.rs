@@ -2,6 +2,7 @@
 //! Error at every window size, and assemble the report. Estimates are evaluated in parallel (rayon).
 
 pub mod config;
+pub mod export;
 pub mod inputs;
 
 use rayon::prelude::*;
@@ -59,7 +60,16 @@ pub fn evaluate(config: &EvalConfig, progress: Progress<'_>) -> Result<Report> {
     let results: Vec<Result<(EstimateReport, Vec<Warning>)>> = inputs
         .estimates
         .par_iter()
-        .map(|est| evaluate_estimate(config, reference, est, t0_ns, (crop_start, crop_end)))
+        .map(|est| {
+            evaluate_estimate(
+                config,
+                reference,
+                est,
+                t0_ns,
+                (crop_start, crop_end),
+                inputs.estimates.len(),
+            )
+        })
         .collect();
     let mut estimates = Vec::with_capacity(results.len());
     let mut warnings = inputs.warnings.clone();
@@ -168,6 +178,7 @@ fn evaluate_estimate(
     est: &Loaded,
     t0_ns: i64,
     crop: (Option<i64>, Option<i64>),
+    n_estimates: usize,
 ) -> Result<(EstimateReport, Vec<Warning>)> {
     let ref_t = reference.trajectory.times_s(t0_ns);
     let ref_p = &reference.trajectory.positions;
@@ -314,6 +325,12 @@ fn evaluate_estimate(
     .iter()
     .map(|r| drift_report(r, t0_s))
     .collect();
+    if let Some(file) = &config.export_aligned {
+        export::write_aligned(
+            &export::aligned_path(file, &est.name, n_estimates),
+            &aligned,
+        )?;
+    }
     Ok((
         EstimateReport {
             name: est.name.clone(),
@@ -396,5 +413,7 @@ fn drift_report(r: &DriftErrorResult, t0_s: f64) -> DriftErrorReport {
                 de: w.de,
             })
             .collect(),
+        scale: r.lever_fit.map(|f| f.scale),
+        lateral_lever_m: r.lever_fit.map(|f| f.lateral_lever_m),
     }
 }

@@ -11,6 +11,7 @@ use nalgebra::Vector3;
 
 use super::decimate::DecimatedPath;
 use super::lever::{segment_alpha, CurvatureTrack, LeverCorrection};
+use super::lever_fit::{fit_alpha, fit_scale_and_lever, FitSample, HeadingTrack, LeverFit};
 use super::rotation_in_place::{rotations_in_place, RotationInPlaceParams};
 use super::stats::{summarize, Summary};
 use super::windows::{gaps, path_windows};
@@ -108,6 +109,8 @@ pub struct DriftErrorResult {
     pub stats: Option<Summary>,
     /// Rotations in place left out of both paths, `[t_start, t_end]` seconds.
     pub excluded_intervals: Vec<[f64; 2]>,
+    /// The fitted scale and lateral lever arm ([`LeverCorrection::Fit`] only).
+    pub lever_fit: Option<LeverFit>,
 }
 
 /// The Drift Error for `params.window_m`. Times are seconds relative to a common origin, increasing;
@@ -170,14 +173,16 @@ pub fn drift_error_windows(
                 params.curvature.dt_max_s,
             ),
         )),
-        LeverCorrection::None => None,
+        LeverCorrection::None | LeverCorrection::Fit => None,
     };
+    let headings =
+        (params.lever_correction == LeverCorrection::Fit).then(|| HeadingTrack::new(&ref_path));
 
     windows_m
         .iter()
         .map(|&w| {
             let layout = path_windows(&ref_path, w, params.overlap, [e0, e1], &blocked)?;
-            let windows: Vec<DriftWindow> = layout
+            let mut windows: Vec<DriftWindow> = layout
                 .windows
                 .iter()
                 .map(|win| {
@@ -211,6 +216,31 @@ pub fn drift_error_windows(
                     }
                 })
                 .collect();
+            let lever_fit = headings.as_ref().and_then(|h| {
+                let dpsi: Vec<f64> = layout
+                    .windows
+                    .iter()
+                    .map(|win| h.change(win.start, win.end))
+                    .collect();
+                let samples: Vec<FitSample> = windows
+                    .iter()
+                    .zip(&dpsi)
+                    .map(|(w, &psi)| FitSample {
+                        ref_length_m: w.ref_length_m,
+                        est_length_m: w.est_length_m,
+                        heading_change_rad: psi,
+                        usable: !excluded
+                            .iter()
+                            .any(|iv| iv[0] < w.t_end && iv[1] > w.t_start),
+                    })
+                    .collect();
+                let fit = fit_scale_and_lever(&samples)?;
+                for (w, &psi) in windows.iter_mut().zip(&dpsi) {
+                    w.alpha = fit_alpha(w.ref_length_m, psi, fit.lateral_lever_m);
+                    w.de = (1.0 - w.alpha * w.est_length_m / w.ref_length_m).abs();
+                }
+                Some(fit)
+            });
             let des: Vec<f64> = windows.iter().map(|w| w.de).collect();
             Ok(DriftErrorResult {
                 window_m: w,
@@ -221,6 +251,7 @@ pub fn drift_error_windows(
                 discarded_fraction: ref_path.discarded_fraction(),
                 discarded_fraction_estimate: est_path.discarded_fraction(),
                 excluded_intervals: excluded.clone(),
+                lever_fit,
             })
         })
         .collect()

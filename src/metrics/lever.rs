@@ -30,6 +30,9 @@ pub enum LeverCorrection {
     Paper,
     /// No correction (α = 1).
     None,
+    /// Beyond the paper: fit the scale s and the lateral lever arm d of L_est = s·(L_ref − d·Δψ) over
+    /// all windows, and correct each window by d ([`super::lever_fit`]).
+    Fit,
 }
 
 impl LeverCorrection {
@@ -38,6 +41,7 @@ impl LeverCorrection {
         match self {
             LeverCorrection::Paper => "paper",
             LeverCorrection::None => "none",
+            LeverCorrection::Fit => "fit",
         }
     }
 }
@@ -49,8 +53,9 @@ impl std::str::FromStr for LeverCorrection {
         match s {
             "paper" => Ok(LeverCorrection::Paper),
             "none" => Ok(LeverCorrection::None),
+            "fit" => Ok(LeverCorrection::Fit),
             _ => Err(crate::Error::InvalidArgument(format!(
-                "lever correction `{s}`: expected `paper` or `none`"
+                "lever correction `{s}`: expected `fit`, `paper` or `none`"
             ))),
         }
     }
@@ -138,7 +143,7 @@ mod tests {
 
     #[test]
     fn names_round_trip() {
-        for c in [LeverCorrection::Paper, LeverCorrection::None] {
+        for c in [LeverCorrection::Paper, LeverCorrection::None, LeverCorrection::Fit] {
             assert_eq!(c.as_str().parse::<LeverCorrection>().unwrap(), c);
             assert_eq!(
                 serde_json::to_string(&c).unwrap(),

@@ -3,6 +3,7 @@
 pub mod decimate;
 pub mod drift_error;
 pub mod lever;
+pub mod lever_fit;
 pub mod rotation_in_place;
 pub mod stats;
 pub mod windows;

@@ -193,6 +193,15 @@ pub struct DriftErrorReport {
     /// Rotation in place (the reference still, the estimate sweeping an arc): excluded, [start, end] s.
     pub excluded_intervals: Vec<[f64; 2]>,
     pub per_window: Vec<WindowReport>,
+    /// `fit` correction only: the fitted path scale s of L_est = s·(L_ref − d·Δψ) (1.02 = estimate 2 %
+    /// long); null for other corrections.
+    #[serde(default)]
+    pub scale: Option<f64>,
+    /// `fit` correction only: the fitted lateral lever arm d, metres; > 0 = the estimate sensor to the
+    /// LEFT of the reference point (body x forward, y left, z up); 0 when the windows turn too little to
+    /// tell; null for other corrections.
+    #[serde(default)]
+    pub lateral_lever_m: Option<f64>,
 }
 
 /// One Drift Error window.

@@ -57,6 +57,7 @@ pub fn config_from_args(a: &EvalArgs) -> Result<EvalConfig> {
     c.lever_correction = match a.lever_correction {
         LeverCorrectionArg::Paper => LeverCorrection::Paper,
         LeverCorrectionArg::None => LeverCorrection::None,
+        LeverCorrectionArg::Fit => LeverCorrection::Fit,
     };
     c.lever_arm_m = a.lever_arm;
     c.offset_method = match a.offset_method {
@@ -70,6 +71,7 @@ pub fn config_from_args(a: &EvalArgs) -> Result<EvalConfig> {
     c.time_offset_s = a.time_offset;
     c.t_start = a.t_start;
     c.t_end = a.t_end;
+    c.export_aligned = a.export_aligned.clone();
     Ok(c)
 }
 
