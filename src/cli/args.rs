@@ -131,6 +131,13 @@ pub struct EvalArgs {
     /// Print nothing but errors and warnings.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Also write the recording with the results added (aligned estimate, Drift Error windows,
+    /// curvature, metadata and report) to OUT.mcap.
+    #[arg(long, value_name = "OUT.mcap")]
+    pub annotate: Option<PathBuf>,
+    /// Replace an existing --annotate output.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Debug, Args)]
