@@ -16,3 +16,4 @@ pub mod trajectory;
 pub use error::{Error, Result};
 pub use trajectory::Trajectory;
 pub mod annotate;
+pub mod batch;
