@@ -15,3 +15,5 @@ pub mod trajectory;
 
 pub use error::{Error, Result};
 pub use trajectory::Trajectory;
+pub mod annotate;
+pub mod batch;

@@ -20,6 +20,10 @@ pub enum Command {
     Topics(TopicsArgs),
     /// Write a simulated mission (ROS 2 MCAP) with known truth.
     Simulate(SimulateArgs),
+    /// Evaluate many missions in parallel (a TOML manifest, or a folder of recordings).
+    Batch(BatchArgs),
+    /// Build a batch summary from the per-mission results of several folders (sharded runs).
+    Merge(MergeArgs),
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -148,6 +152,13 @@ pub struct EvalArgs {
     /// estimates the name goes before the extension: FILE.tum → FILE.NAME.tum.
     #[arg(long, value_name = "FILE")]
     pub export_aligned: Option<PathBuf>,
+    /// Also write the recording with the results added (aligned estimate, Drift Error windows,
+    /// curvature, metadata and report) to OUT.mcap.
+    #[arg(long, value_name = "OUT.mcap")]
+    pub annotate: Option<PathBuf>,
+    /// Replace an existing --annotate output.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Debug, Args)]
@@ -207,4 +218,50 @@ pub fn parse_triple(flag: &str, s: &str) -> Result<[f64; 3], String> {
         .map_err(|_| format!("{flag} takes three comma-separated numbers, got `{s}`"))?;
     <[f64; 3]>::try_from(v)
         .map_err(|_| format!("{flag} takes three comma-separated numbers, got `{s}`"))
+}
+
+#[derive(Debug, Args)]
+pub struct BatchArgs {
+    /// A manifest (.toml), or a folder of recordings (.mcap, also one level down).
+    pub input: PathBuf,
+    /// For a folder: the reference topic.
+    #[arg(long, value_name = "TOPIC")]
+    pub reference: Option<String>,
+    /// For a folder: estimate topic, optionally named (repeatable).
+    #[arg(long, value_name = "[NAME=]TOPIC")]
+    pub estimate: Vec<String>,
+    /// Output folder: <mission>.json, <mission>.mcap, summary.{json,csv,md}.
+    #[arg(long, value_name = "DIR", default_value = "trajdrift-batch")]
+    pub out: PathBuf,
+    /// Missions at once (default: the number of cores).
+    #[arg(long, short, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Also write each mission's annotated recording, <mission>.mcap.
+    #[arg(long)]
+    pub annotate: bool,
+    /// Replace existing annotated recordings.
+    #[arg(long)]
+    pub force: bool,
+    /// Keep missions already done in --out (resume an interrupted run).
+    #[arg(long)]
+    pub skip_existing: bool,
+    /// Run only shard I of N (1-based); `trajdrift merge` builds the summary of all shards.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<String>,
+    /// Print nothing but errors and warnings.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// Folders holding per-mission results (<mission>.json).
+    #[arg(required = true)]
+    pub dirs: Vec<PathBuf>,
+    /// Where to write summary.{json,csv,md} (default: the first folder).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
 }

@@ -2,6 +2,7 @@
 //! codes. Results go to stdout, diagnostics to stderr.
 
 pub mod args;
+pub mod batch_progress;
 pub mod commands;
 pub mod progress;
 
@@ -22,6 +23,8 @@ pub fn run(cli: args::Cli) -> ExitCode {
         args::Command::Eval(a) => commands::eval::run(*a),
         args::Command::Topics(a) => commands::topics::run(a),
         args::Command::Simulate(a) => commands::simulate::run(a),
+        args::Command::Batch(a) => commands::batch::run(a),
+        args::Command::Merge(a) => commands::merge::run(a),
     };
     match result {
         Ok(code) => ExitCode::from(code),

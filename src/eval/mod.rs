@@ -19,7 +19,7 @@ use crate::report::json::{
 };
 use crate::sources::{Progress, Warning};
 use config::EvalConfig;
-use inputs::{load, Loaded};
+use inputs::{load, Inputs, Loaded};
 
 /// Every method the offset search runs (the applied one is `EvalConfig::offset_method`).
 pub const OFFSET_METHODS: [OffsetMethod; 3] = crate::align::auto_offset::AUTO_METHODS;
@@ -27,6 +27,15 @@ pub const OFFSET_METHODS: [OffsetMethod; 3] = crate::align::auto_offset::AUTO_ME
 /// Runs the whole evaluation. Warnings the user must see (a weak offset, a truncated recording) are in
 /// `Report::warnings`; the CLI exits with code 3 when there is any.
 pub fn evaluate(config: &EvalConfig, progress: Progress<'_>) -> Result<Report> {
+    evaluate_with_inputs(config, progress).map(|(report, _)| report)
+}
+
+/// Like [`evaluate`], and also returns the loaded trajectories (the reference cropped like the
+/// evaluation), for consumers that need more than the report (the annotated MCAP's curvature channels).
+pub fn evaluate_with_inputs(
+    config: &EvalConfig,
+    progress: Progress<'_>,
+) -> Result<(Report, Inputs)> {
     config.validate()?;
     let mut inputs = load(config, progress)?;
     let reference = &mut inputs.reference;
@@ -79,7 +88,7 @@ pub fn evaluate(config: &EvalConfig, progress: Progress<'_>) -> Result<Report> {
         warnings.extend(w);
     }
     let to_s = |ns: Option<i64>| ns.map(|t| t as f64 * 1e-9);
-    Ok(Report {
+    let report = Report {
         schema_version: SCHEMA_VERSION,
         tool: Tool::default(),
         input: Input {
@@ -126,7 +135,8 @@ pub fn evaluate(config: &EvalConfig, progress: Progress<'_>) -> Result<Report> {
         },
         estimates,
         warnings,
-    })
+    };
+    Ok((report, inputs))
 }
 
 fn require_samples(path: &str, t: &Loaded) -> Result<()> {

@@ -3,8 +3,9 @@
 use anyhow::{anyhow, Result};
 
 use trajdrift::align::time_offset::OffsetMethod;
+use trajdrift::annotate::annotate;
 use trajdrift::eval::config::{EvalConfig, NamedInput, Platform};
-use trajdrift::eval::evaluate;
+use trajdrift::eval::evaluate_with_inputs;
 use trajdrift::metrics::lever::LeverCorrection;
 use trajdrift::report::{output::write_output, table};
 use trajdrift::sources::StampSource;
@@ -78,15 +79,35 @@ pub fn config_from_args(a: &EvalArgs) -> Result<EvalConfig> {
 /// Runs the command; returns the exit code.
 pub fn run(a: EvalArgs) -> Result<u8> {
     let config = config_from_args(&a)?;
+    if let (Some(out), Some(rec)) = (&a.annotate, &config.recording) {
+        // Refuse before the evaluation pass rather than after it.
+        trajdrift::annotate::check_output(rec, out, a.force)?;
+    }
     let total = config
         .recording
         .as_ref()
         .and_then(|p| std::fs::metadata(p).ok())
         .map_or(0, |m| m.len());
     let progress = ReadProgress::new(total, a.quiet);
-    let report = evaluate(&config, &|b| progress.update(b));
+    let result = evaluate_with_inputs(&config, &|b| progress.update(b));
     progress.finish();
-    let report = report?;
+    let (report, inputs) = result?;
+    if let Some(out) = &a.annotate {
+        let progress = ReadProgress::new(total, a.quiet);
+        let done = annotate(&config, &report, &inputs, out, a.force, &|b| {
+            progress.update(b)
+        });
+        progress.finish();
+        let done = done?;
+        if !a.quiet {
+            eprintln!(
+                "wrote {} ({} input messages copied, {} added)",
+                done.path.display(),
+                done.copy.messages,
+                done.counts.values().sum::<u64>()
+            );
+        }
+    }
     let json_to_stdout = a.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
     if let Some(path) = &a.json {
         let mut bytes = serde_json::to_vec_pretty(&report)?;

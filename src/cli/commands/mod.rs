@@ -1,5 +1,7 @@
 //! One handler per command: turn arguments into a library call, print the result.
 
+pub mod batch;
 pub mod eval;
+pub mod merge;
 pub mod simulate;
 pub mod topics;

@@ -1,0 +1,210 @@
+//! `eval --annotate OUT.mcap`: the input recording streamed into a new MCAP with the results beside the
+//! data, so Foxglove or RViz show the aligned estimate, its Drift Error windows and the curvature
+//! signatures on the recording's own timeline.
+//!
+//! [`copy`] is the record-by-record copy pass, [`channels`] the new channels and their messages,
+//! [`metadata`] the `trajdrift` metadata record and report attachment, [`input_info`] the ids and
+//! compression read from the input's summary. The output is written beside OUT and renamed when complete.
+
+pub mod channels;
+pub mod copy;
+pub mod input_info;
+pub mod metadata;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::align::curvature::{curvature_signature, CurvatureSample};
+use crate::decode::message_kind;
+use crate::error::{Error, Result};
+use crate::eval::config::{EvalConfig, TrajectoryInput};
+use crate::eval::inputs::Inputs;
+use crate::report::json::Report;
+use crate::sources::Progress;
+use crate::trajectory::Trajectory;
+use channels::{
+    offset_ns, AlignedSource, Annotator, Counts, CurvatureMessage, DriftErrorMessage, EstimatePlan,
+    Plan,
+};
+use copy::{copy_with, CopyOutcome};
+use input_info::{read_input_info, InputInfo};
+
+/// What an annotate run wrote.
+#[derive(Debug, Clone)]
+pub struct AnnotateOutcome {
+    pub path: PathBuf,
+    pub copy: CopyOutcome,
+    /// Messages written per new topic.
+    pub counts: Counts,
+}
+
+/// Checks that `out` may be written for `input`: not the input itself, and not existing unless `force`.
+pub fn check_output(input: &Path, out: &Path, force: bool) -> Result<()> {
+    let canon = |p: &Path| -> Option<PathBuf> {
+        if let Ok(c) = p.canonicalize() {
+            return Some(c);
+        }
+        let parent = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        Some(parent.canonicalize().ok()?.join(p.file_name()?))
+    };
+    if canon(input).is_some_and(|i| canon(out).is_some_and(|o| i == o)) {
+        return Err(Error::InvalidArgument(format!(
+            "{}: --annotate would overwrite the input recording; choose another output file",
+            out.display()
+        )));
+    }
+    if out.exists() && !force {
+        return Err(Error::InvalidArgument(format!(
+            "{}: exists; pass --force to replace it",
+            out.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Writes the annotated copy of the evaluated recording to `out`. `report` and `inputs` come from
+/// [`crate::eval::evaluate_with_inputs`] with `config`.
+pub fn annotate(
+    config: &EvalConfig,
+    report: &Report,
+    inputs: &Inputs,
+    out: &Path,
+    force: bool,
+    progress: Progress<'_>,
+) -> Result<AnnotateOutcome> {
+    let Some(recording) = config.recording.as_deref() else {
+        return Err(Error::InvalidArgument(
+            "--annotate needs a RECORDING (.mcap) to copy".into(),
+        ));
+    };
+    check_output(recording, out, force)?;
+    let plan = plan(config, report, inputs);
+    let info: InputInfo = read_input_info(recording);
+    let schema_ids = InputInfo::free_ids(&info.schema_ids, 3);
+    let channel_ids = InputInfo::free_ids(&info.channel_ids, 1 + 3 * plan.estimates.len());
+    let mut annotator = Annotator::new(out.to_path_buf(), plan, &schema_ids, &channel_ids)?;
+
+    let out_err = |e: std::io::Error| Error::Output {
+        path: out.to_path_buf(),
+        detail: e.to_string(),
+    };
+    let dir = match out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out.mcap".into());
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = (|| -> Result<CopyOutcome> {
+        let file = std::fs::File::create(&tmp).map_err(out_err)?;
+        let options = mcap::WriteOptions::new()
+            .compression(info.output_compression())
+            .library(concat!("trajdrift ", env!("CARGO_PKG_VERSION")));
+        let (outcome, mut sink) = copy_with(
+            recording,
+            std::io::BufWriter::new(file),
+            out,
+            options,
+            &mut annotator,
+            progress,
+        )?;
+        sink.flush().map_err(out_err)?;
+        sink.get_ref().sync_all().map_err(out_err)?;
+        drop(sink);
+        std::fs::rename(&tmp, out).map_err(out_err)?;
+        Ok(outcome)
+    })();
+    match result {
+        Ok(copy) => Ok(AnnotateOutcome {
+            path: out.to_path_buf(),
+            copy,
+            counts: annotator.counts(),
+        }),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+fn curvature_messages(traj: &Trajectory, config: &EvalConfig) -> Vec<(u64, CurvatureMessage)> {
+    let t0 = traj.stamps_ns.first().copied().unwrap_or(0);
+    let sig: Vec<CurvatureSample> = curvature_signature(
+        &traj.times_s(t0),
+        &traj.positions,
+        &config.curvature_params(),
+    );
+    sig.iter()
+        .filter_map(|s| {
+            let stamp = *traj.stamps_ns.get(s.index)?;
+            Some((
+                u64::try_from(stamp).ok()?,
+                CurvatureMessage {
+                    t: stamp as f64 * 1e-9,
+                    curvature: s.curvature,
+                    signed_curvature: s.signed_curvature(),
+                    turn_rad: s.turn_rad,
+                },
+            ))
+        })
+        .collect()
+}
+
+/// What to add, from the evaluation's results.
+fn plan(config: &EvalConfig, report: &Report, inputs: &Inputs) -> Plan {
+    let estimates = inputs
+        .estimates
+        .iter()
+        .filter_map(|est| {
+            let r = report.estimates.iter().find(|r| r.name == est.name)?;
+            let dt_ns = offset_ns(r.time_offset.applied_s);
+            let aligned = est.trajectory.shifted(dt_ns);
+            let topic = config.estimates.iter().find_map(|e| match &e.input {
+                TrajectoryInput::Topic(t) if e.name == est.name => Some(t.clone()),
+                _ => None,
+            });
+            let drift_error = r
+                .drift_error
+                .iter()
+                .flat_map(|d| {
+                    d.per_window.iter().map(move |w| {
+                        (
+                            (w.t_end * 1e9).round().max(0.0) as u64,
+                            DriftErrorMessage {
+                                window_m: d.window_m,
+                                t_start: w.t_start,
+                                t_end: w.t_end,
+                                ref_length_m: w.ref_length_m,
+                                est_length_m: w.est_length_m,
+                                alpha: w.alpha,
+                                de: w.de,
+                            },
+                        )
+                    })
+                })
+                .collect();
+            Some(EstimatePlan {
+                name: est.name.clone(),
+                dt_ns,
+                curvature: curvature_messages(&aligned, config),
+                drift_error,
+                aligned: match topic {
+                    Some(t) if message_kind(&est.type_name).is_some() => {
+                        AlignedSource::PatchTopic(t)
+                    }
+                    _ => AlignedSource::Generate(aligned),
+                },
+            })
+        })
+        .collect();
+    Plan {
+        reference_curvature: curvature_messages(&inputs.reference.trajectory, config),
+        estimates,
+        report: report.clone(),
+    }
+}

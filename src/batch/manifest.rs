@@ -1,0 +1,314 @@
+//! The batch manifest: which missions to evaluate, each a recording, a reference, one or more named
+//! estimates and optional parameter overrides, in TOML (read with the `toml` crate and serde):
+//!
+//! ```toml
+//! [defaults]                 # optional, for every mission
+//! window = [5, 10]
+//! platform = "wheeled"
+//!
+//! [[mission]]
+//! name = "lever_arm"         # optional: default the recording's file stem
+//! recording = "fixtures/lever_arm/mission.mcap"   # relative to the manifest
+//! reference = "/reference/position"
+//! estimates = ["/estimate/odom", "pose=/estimate/pose"]
+//! [mission.parameters]       # optional, over the defaults
+//! time_offset = 0.2
+//! ```
+//!
+//! A folder of recordings is the same with one mission per `.mcap` found (see [`Manifest::from_dir`]).
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::align::time_offset::OffsetMethod;
+use crate::error::{Error, Result};
+use crate::eval::config::{EvalConfig, NamedInput, Platform};
+use crate::metrics::lever::LeverCorrection;
+use crate::sources::StampSource;
+
+/// Parameter overrides, named like the `eval` flags (`-` written `_`).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Overrides {
+    pub platform: Option<String>,
+    pub eps_min: Option<f64>,
+    pub curvature_eps: Option<f64>,
+    pub path_eps: Option<f64>,
+    pub theta_max: Option<f64>,
+    pub dt_max: Option<f64>,
+    pub window: Option<Vec<f64>>,
+    pub overlap: Option<f64>,
+    pub lever_correction: Option<String>,
+    pub lever_arm: Option<f64>,
+    pub offset_method: Option<String>,
+    pub max_offset: Option<f64>,
+    pub grid: Option<f64>,
+    pub time_offset: Option<f64>,
+    pub stamp: Option<String>,
+    pub t_start: Option<f64>,
+    pub t_end: Option<f64>,
+}
+
+impl Overrides {
+    /// Applies the set values to `c`; an unknown word names the field and what it accepts.
+    pub fn apply(&self, c: &mut EvalConfig) -> Result<()> {
+        let bad = |field: &str, v: &str, ok: &str| {
+            Error::InvalidArgument(format!("manifest: {field} = \"{v}\": expected {ok}"))
+        };
+        if let Some(p) = &self.platform {
+            c.platform = match p.as_str() {
+                "legged" => Platform::Legged,
+                "wheeled" => Platform::Wheeled,
+                _ => return Err(bad("platform", p, "legged or wheeled")),
+            };
+        }
+        if let Some(m) = &self.offset_method {
+            c.offset_method = match m.as_str() {
+                "curvature" => OffsetMethod::Curvature,
+                "speed" => OffsetMethod::Speed,
+                _ => return Err(bad("offset_method", m, "curvature or speed")),
+            };
+        }
+        if let Some(s) = &self.stamp {
+            c.stamp = match s.as_str() {
+                "header" => StampSource::Header,
+                "log" => StampSource::Log,
+                _ => return Err(bad("stamp", s, "header or log")),
+            };
+        }
+        if let Some(l) = &self.lever_correction {
+            c.lever_correction = l.parse::<LeverCorrection>()?;
+        }
+        let set = |dst: &mut f64, v: Option<f64>| {
+            if let Some(v) = v {
+                *dst = v;
+            }
+        };
+        set(&mut c.theta_max_rad, self.theta_max);
+        set(&mut c.dt_max_s, self.dt_max);
+        set(&mut c.overlap, self.overlap);
+        set(&mut c.lever_arm_m, self.lever_arm);
+        set(&mut c.max_offset_s, self.max_offset);
+        set(&mut c.grid_s, self.grid);
+        c.eps_min_m = self.eps_min.or(c.eps_min_m);
+        c.curvature_eps_m = self.curvature_eps.or(c.curvature_eps_m);
+        c.path_eps_m = self.path_eps.or(c.path_eps_m);
+        c.time_offset_s = self.time_offset.or(c.time_offset_s);
+        c.t_start = self.t_start.or(c.t_start);
+        c.t_end = self.t_end.or(c.t_end);
+        if let Some(w) = &self.window {
+            c.windows_m = w.clone();
+        }
+        Ok(())
+    }
+}
+
+/// One mission as written in the manifest.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mission {
+    /// Unique name: the output files are `<name>.json` and `<name>.mcap`.
+    pub name: Option<String>,
+    pub recording: PathBuf,
+    pub reference: String,
+    /// `[NAME=]TOPIC`, like `eval --estimate`.
+    pub estimates: Vec<String>,
+    #[serde(default)]
+    pub parameters: Overrides,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    #[serde(default)]
+    defaults: Overrides,
+    #[serde(default)]
+    mission: Vec<Mission>,
+}
+
+/// A mission ready to run: its name and its evaluation request.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MissionSpec {
+    pub name: String,
+    pub config: EvalConfig,
+}
+
+/// Every mission of a batch, in manifest order, names unique.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Manifest {
+    pub missions: Vec<MissionSpec>,
+}
+
+/// True for names usable as file names everywhere: letters, digits, `.`, `_`, `-`.
+fn valid_name(n: &str) -> bool {
+    !n.is_empty()
+        && !n.starts_with('.')
+        && n.chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
+}
+
+impl Manifest {
+    /// Reads a TOML manifest; relative recording paths are relative to its folder.
+    pub fn from_toml(path: &Path) -> Result<Manifest> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let file: File = toml::from_str(&text).map_err(|e| {
+            Error::InvalidArgument(format!(
+                "{}: not a valid manifest: {}",
+                path.display(),
+                e.to_string().replace('\n', " ")
+            ))
+        })?;
+        let base = path.parent().unwrap_or(Path::new("."));
+        let mut missions = Vec::with_capacity(file.mission.len());
+        for m in file.mission {
+            let recording = base.join(&m.recording);
+            let name = m.name.clone().unwrap_or_else(|| stem(&m.recording));
+            let mut config = EvalConfig::new(
+                Some(recording),
+                NamedInput::topic(&m.reference),
+                m.estimates.iter().map(|e| NamedInput::topic(e)).collect(),
+            );
+            file.defaults.apply(&mut config)?;
+            m.parameters.apply(&mut config)?;
+            missions.push(MissionSpec { name, config });
+        }
+        let manifest = Manifest { missions };
+        manifest.check(&path.display().to_string())?;
+        Ok(manifest)
+    }
+
+    /// One mission per `.mcap` in `dir` or its direct subfolders, named by its path under `dir`
+    /// without the extension, `/` written `-` (`runs/a.mcap` → `runs-a`), sorted by name.
+    pub fn from_dir(dir: &Path, reference: &str, estimates: &[String]) -> Result<Manifest> {
+        let mut found = Vec::new();
+        collect_mcaps(dir, 2, &mut found)?;
+        found.sort();
+        let missions = found
+            .into_iter()
+            .map(|p| {
+                let rel = p.strip_prefix(dir).unwrap_or(&p).with_extension("");
+                let name: String = rel
+                    .to_string_lossy()
+                    .chars()
+                    .map(|c| match c {
+                        '/' | '\\' => '-',
+                        c if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') => c,
+                        _ => '_',
+                    })
+                    .collect();
+                MissionSpec {
+                    name,
+                    config: EvalConfig::new(
+                        Some(p),
+                        NamedInput::topic(reference),
+                        estimates.iter().map(|e| NamedInput::topic(e)).collect(),
+                    ),
+                }
+            })
+            .collect();
+        let manifest = Manifest { missions };
+        manifest.check(&dir.display().to_string())?;
+        Ok(manifest)
+    }
+
+    fn check(&self, origin: &str) -> Result<()> {
+        if self.missions.is_empty() {
+            return Err(Error::InvalidArgument(format!(
+                "{origin}: no mission (add [[mission]] entries, or .mcap files to the folder)"
+            )));
+        }
+        let mut names: Vec<&str> = Vec::new();
+        for m in &self.missions {
+            if !valid_name(&m.name) {
+                return Err(Error::InvalidArgument(format!(
+                    "{origin}: mission name `{}`: use letters, digits, `.`, `_` and `-` only",
+                    m.name
+                )));
+            }
+            if names.contains(&m.name.as_str()) {
+                return Err(Error::InvalidArgument(format!(
+                    "{origin}: two missions are named `{}`; give each a unique name",
+                    m.name
+                )));
+            }
+            names.push(&m.name);
+        }
+        Ok(())
+    }
+}
+
+fn stem(p: &Path) -> String {
+    p.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+fn collect_mcaps(dir: &Path, depth: usize, out: &mut Vec<PathBuf>) -> Result<()> {
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let path = entry.map_err(|e| Error::io(dir, e))?.path();
+        if path.is_dir() && depth > 1 {
+            collect_mcaps(&path, depth - 1, out)?;
+        } else if path.extension().is_some_and(|e| e == "mcap") {
+            out.push(path);
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_defaults_and_overrides() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.toml");
+        std::fs::write(
+            &p,
+            r#"
+[defaults]
+window = [5, 10]
+platform = "wheeled"
+
+[[mission]]
+recording = "a/mission.mcap"
+reference = "/reference/position"
+estimates = ["/estimate/odom", "pose=/estimate/pose"]
+
+[[mission]]
+name = "b"
+recording = "b.mcap"
+reference = "/r"
+estimates = ["/e"]
+[mission.parameters]
+time_offset = -0.25
+window = [2]
+"#,
+        )
+        .unwrap();
+        let m = Manifest::from_toml(&p).unwrap();
+        assert_eq!(m.missions[0].name, "mission");
+        assert_eq!(m.missions[0].config.windows_m, vec![5.0, 10.0]);
+        assert_eq!(m.missions[0].config.estimates[1].name, "pose");
+        assert_eq!(m.missions[1].config.time_offset_s, Some(-0.25));
+        assert_eq!(m.missions[1].config.windows_m, vec![2.0]);
+        assert_eq!(m.missions[1].config.platform, Platform::Wheeled);
+        assert_eq!(
+            m.missions[0].config.recording.as_deref(),
+            Some(dir.path().join("a/mission.mcap").as_path())
+        );
+    }
+
+    #[test]
+    fn rejects_unknown_fields_and_duplicate_names() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.toml");
+        std::fs::write(&p, "[[mission]]\nrecording = \"a.mcap\"\nreference = \"/r\"\nestimates = [\"/e\"]\nwindows = [1]\n").unwrap();
+        let e = Manifest::from_toml(&p).unwrap_err().to_string();
+        assert!(e.contains("windows"), "{e}");
+        std::fs::write(&p, "[[mission]]\nrecording = \"a.mcap\"\nreference = \"/r\"\nestimates = [\"/e\"]\n[[mission]]\nrecording = \"x/a.mcap\"\nreference = \"/r\"\nestimates = [\"/e\"]\n").unwrap();
+        let e = Manifest::from_toml(&p).unwrap_err().to_string();
+        assert!(e.contains("two missions"), "{e}");
+    }
+}

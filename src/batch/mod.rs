@@ -1,0 +1,10 @@
+//! `trajdrift batch`: many missions evaluated in parallel, each streamed like `eval`, with per-mission
+//! results and a summary across missions; `--shard I/N` and `trajdrift merge` spread a batch over a
+//! cluster.
+//!
+//! [`manifest`] reads what to run, [`run`] runs it, [`summary`] aggregates, [`shard`] splits.
+
+pub mod manifest;
+pub mod run;
+pub mod shard;
+pub mod summary;

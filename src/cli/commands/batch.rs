@@ -1,0 +1,69 @@
+//! `trajdrift batch`: evaluate the missions of a manifest (or a folder of recordings) in parallel.
+
+use anyhow::{anyhow, Result};
+
+use trajdrift::batch::manifest::Manifest;
+use trajdrift::batch::run::{run_batch, BatchOptions};
+use trajdrift::batch::shard::Shard;
+
+use crate::cli::args::BatchArgs;
+use crate::cli::batch_progress::BatchBars;
+
+/// Runs the command; returns the exit code (1 when a mission failed, else 3 when an offset was weak).
+pub fn run(a: BatchArgs) -> Result<u8> {
+    let manifest = if a.input.is_dir() {
+        let reference = a.reference.as_deref().ok_or_else(|| {
+            trajdrift::Error::InvalidArgument(format!(
+                "{}: a folder needs --reference TOPIC and --estimate TOPIC",
+                a.input.display()
+            ))
+        })?;
+        if a.estimate.is_empty() {
+            return Err(trajdrift::Error::InvalidArgument(format!(
+                "{}: a folder needs --estimate TOPIC (repeatable)",
+                a.input.display()
+            ))
+            .into());
+        }
+        Manifest::from_dir(&a.input, reference, &a.estimate)?
+    } else {
+        if a.reference.is_some() || !a.estimate.is_empty() {
+            return Err(trajdrift::Error::InvalidArgument(
+                "--reference/--estimate are for a folder of recordings; a manifest names them per mission".into(),
+            )
+            .into());
+        }
+        Manifest::from_toml(&a.input)?
+    };
+    let shard = a.shard.as_deref().map(str::parse::<Shard>).transpose()?;
+    let opts = BatchOptions {
+        out_dir: a.out.clone(),
+        jobs: a.jobs.unwrap_or(0),
+        annotate: a.annotate,
+        force: a.force,
+        skip_existing: a.skip_existing,
+        shard,
+    };
+    let bars = BatchBars::new(a.quiet);
+    let outcome = run_batch(&manifest, &opts, &|e| bars.event(e));
+    bars.finish();
+    let outcome = outcome.map_err(|e| anyhow!(e))?;
+    let s = &outcome.summary;
+    for f in &s.failed {
+        eprintln!("error: mission {}: {}", f.mission, f.error);
+    }
+    for w in &s.weak {
+        eprintln!("warning [weak_time_offset]: mission {w}: an estimate's offset is weak");
+    }
+    if !a.quiet {
+        print!("{}", s.to_markdown());
+        eprintln!(
+            "{} missions ({} kept from an earlier run), {} failed; results in {}",
+            s.missions,
+            outcome.skipped.len(),
+            s.failed.len(),
+            a.out.display()
+        );
+    }
+    Ok(s.exit_code())
+}
