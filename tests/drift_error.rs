@@ -207,7 +207,7 @@ proptest! {
             .collect();
         let rot = Rotation3::from_axis_angle(&Vector3::z_axis(), yaw);
         let moved: Vec<Vector3<f64>> = est.iter().map(|x| rot * x + Vector3::new(tx, ty, tz)).collect();
-        for corr in [LeverCorrection::Paper, LeverCorrection::None] {
+        for corr in [LeverCorrection::Paper, LeverCorrection::None, LeverCorrection::Fit] {
             let d = params(0.3, corr, 0.1);
             let a = drift_error(&t, &p, &t, &est, &d).unwrap();
             let b = drift_error(&t, &p, &t, &moved, &d).unwrap();

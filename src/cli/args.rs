@@ -119,7 +119,7 @@ pub struct EvalArgs {
     #[arg(long, default_value_t = 0.0)]
     pub overlap: f64,
     /// Lever-arm correction of path lengths.
-    #[arg(long, value_enum, default_value = "paper")]
+    #[arg(long, value_enum, default_value = "fit")]
     pub lever_correction: LeverCorrectionArg,
     /// Expected lever arm a between the two sensors, metres (bound of the paper's correction).
     #[arg(long, value_name = "M", default_value_t = 0.1)]

@@ -163,7 +163,7 @@ impl EvalConfig {
             dt_max_s: 2.0,
             windows_m: vec![5.0],
             overlap: 0.0,
-            lever_correction: LeverCorrection::Paper,
+            lever_correction: LeverCorrection::Fit,
             lever_arm_m: 0.1,
             offset_method: OffsetMethod::Auto,
             max_offset_s: 30.0,

@@ -63,7 +63,7 @@ impl Default for DriftParams {
             overlap: 0.0,
             path_eps_m: 1.0,
             dt_max_s: 2.0,
-            lever_correction: LeverCorrection::Paper,
+            lever_correction: LeverCorrection::Fit,
             lever_arm_m: 0.1,
             curvature: CurvatureParams {
                 eps_m: 0.5,
@@ -175,8 +175,8 @@ pub fn drift_error_windows(
         )),
         LeverCorrection::None | LeverCorrection::Fit => None,
     };
-    let headings =
-        (params.lever_correction == LeverCorrection::Fit).then(|| HeadingTrack::new(&ref_path));
+    let headings = (params.lever_correction == LeverCorrection::Fit)
+        .then(|| HeadingTrack::new(&ref_path, 0.5 * params.path_eps_m));
 
     windows_m
         .iter()

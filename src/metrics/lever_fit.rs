@@ -26,8 +26,10 @@
 //! the reference's ε-decimated polyline is split half to each adjacent chord, and a window's Δψ is the sum
 //! over its chords. The sum telescopes to the heading change between the chords around the window's two
 //! ends, so vertex noise does not accumulate (with 2 cm of noise and 1 m chords, about 0.04 rad), and each
-//! turn is wrapped to (−π, π] on its own, so whole loops are counted. Turns next to a chord that counts
-//! zero length (inside a rotation in place) are dropped, like the paths there.
+//! turn is wrapped to (−π, π] on its own, so whole loops are counted. Chords shorter than ε/2 (forced
+//! vertices at the boundaries of a rotation in place, the last vertex) are skipped: their direction is
+//! noise and one wrong wrap would add 2π. Turns across a chord that counts zero length (inside a rotation
+//! in place) are dropped, like the paths there.
 //!
 //! Hand-written: a two-unknown least squares with trimming is a few lines; no crate does this fit.
 
@@ -47,26 +49,30 @@ pub struct HeadingTrack {
 }
 
 impl HeadingTrack {
-    /// Builds the track of `path` (see the module doc for the rule).
-    pub fn new(path: &DecimatedPath<'_>) -> Self {
+    /// Builds the track of `path` (see the module doc for the rule). Chords shorter than `min_chord_m`
+    /// horizontally (the short ones the decimation forces at excluded-interval boundaries and at the end,
+    /// whose direction is noise) take no part: the turn is measured between the counted chords around
+    /// them, unless a chord counting zero length lies in between.
+    pub fn new(path: &DecimatedPath<'_>, min_chord_m: f64) -> Self {
         let m = path.t.len();
         let mut share = vec![0.0; m.saturating_sub(1)];
-        let counted = |c: usize| path.s[c + 1] > path.s[c];
-        for v in 1..m.saturating_sub(1) {
-            if !(counted(v - 1) && counted(v)) {
+        // The previous usable chord: its index and horizontal direction.
+        let mut prev: Option<(usize, f64, f64)> = None;
+        for c in 0..m.saturating_sub(1) {
+            if path.s[c + 1] <= path.s[c] {
+                prev = None; // inside a rotation in place: no turn across it
                 continue;
             }
-            let a = path.p[v] - path.p[v - 1];
-            let b = path.p[v + 1] - path.p[v];
-            let (ax, ay, bx, by) = (a.x, a.y, b.x, b.y);
-            let cross = ax * by - ay * bx;
-            let dot = ax * bx + ay * by;
-            if (ax == 0.0 && ay == 0.0) || (bx == 0.0 && by == 0.0) {
+            let v = path.p[c + 1] - path.p[c];
+            if v.x.hypot(v.y) < min_chord_m.max(1e-9) {
                 continue;
             }
-            let turn = cross.atan2(dot);
-            share[v - 1] += 0.5 * turn;
-            share[v] += 0.5 * turn;
+            if let Some((pc, px, py)) = prev {
+                let turn = (px * v.y - py * v.x).atan2(px * v.x + py * v.y);
+                share[pc] += 0.5 * turn;
+                share[c] += 0.5 * turn;
+            }
+            prev = Some((c, v.x, v.y));
         }
         let mut prefix = Vec::with_capacity(m);
         prefix.push(0.0);
@@ -274,7 +280,7 @@ mod tests {
     fn heading_change_counts_whole_loops() {
         let (t, p) = circle(3.0, 2.0, 0.05);
         let path = DecimatedPath::new(&t, &p, 0.5, &[]);
-        let h = HeadingTrack::new(&path);
+        let h = HeadingTrack::new(&path, 0.25);
         let m = path.t.len();
         // Two loops minus half a chord's turn at each end.
         let total = h.change(0, m - 1);
@@ -282,7 +288,7 @@ mod tests {
         // Clockwise flips the sign.
         let q: Vec<_> = p.iter().map(|v| Vector3::new(v.x, -v.y, 0.0)).collect();
         let path = DecimatedPath::new(&t, &q, 0.5, &[]);
-        let h2 = HeadingTrack::new(&path);
+        let h2 = HeadingTrack::new(&path, 0.25);
         assert!((h2.change(0, m - 1) + total).abs() < 1e-9);
     }
 
