@@ -84,6 +84,15 @@ pub enum Error {
     /// Writing an output failed.
     #[error("{path}: cannot write: {detail}")]
     Output { path: PathBuf, detail: String },
+
+    /// A text trajectory file (KITTI, EuRoC, CSV) could not be parsed; `hint` says what was expected.
+    #[error("{path}:{line}: {detail}; {hint}")]
+    Text {
+        path: PathBuf,
+        line: usize,
+        detail: String,
+        hint: String,
+    },
 }
 
 impl Error {

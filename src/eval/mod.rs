@@ -2,6 +2,7 @@
 //! Error at every window size, and assemble the report. Estimates are evaluated in parallel (rayon).
 
 pub mod config;
+pub mod extrinsics;
 pub mod inputs;
 
 use rayon::prelude::*;
@@ -25,6 +26,7 @@ pub const OFFSET_METHODS: [OffsetMethod; 2] = [OffsetMethod::Curvature, OffsetMe
 pub fn evaluate(config: &EvalConfig, progress: Progress<'_>) -> Result<Report> {
     config.validate()?;
     let mut inputs = load(config, progress)?;
+    let levers = extrinsics::apply_levers(config, &mut inputs.estimates)?;
     let reference = &mut inputs.reference;
     let t0_ns = reference.trajectory.stamps_ns.first().copied().unwrap_or(0);
     let crop = |v: Option<f64>| {
@@ -55,6 +57,9 @@ pub fn evaluate(config: &EvalConfig, progress: Progress<'_>) -> Result<Report> {
         let (e, w) = r?;
         estimates.push(e);
         warnings.extend(w);
+    }
+    for (e, x) in estimates.iter_mut().zip(levers) {
+        e.extrinsics = x;
     }
     let to_s = |ns: Option<i64>| ns.map(|t| t as f64 * 1e-9);
     Ok(Report {
@@ -259,6 +264,7 @@ fn evaluate_estimate(
             dropped_samples: est.dropped_samples,
             time_offset,
             drift_error: drift,
+            extrinsics: None,
         },
         warnings,
     ))

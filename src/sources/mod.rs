@@ -7,6 +7,11 @@
 pub mod mcap;
 pub mod tum;
 
+pub mod euroc;
+pub mod kitti;
+pub mod mapped_csv;
+pub mod text;
+
 use crate::error::Result;
 use crate::trajectory::Trajectory;
 
