@@ -20,6 +20,33 @@ pub enum Command {
     Topics(TopicsArgs),
     /// Write a simulated mission (ROS 2 MCAP) with known truth.
     Simulate(SimulateArgs),
+    /// Write one topic (or a text trajectory) as TUM or CSV text, e.g. for evo.
+    Export(ExportArgs),
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ExportFormatArg {
+    Tum,
+    Csv,
+}
+
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// The recording (.mcap), or a text trajectory file.
+    pub recording: PathBuf,
+    /// The topic to write (not needed for a text file).
+    #[arg(long, value_name = "TOPIC")]
+    pub topic: Option<String>,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "tum")]
+    pub format: ExportFormatArg,
+    /// Output file (`-` = stdout).
+    pub out: PathBuf,
+    /// Which stamp to use.
+    #[arg(long, value_enum, default_value = "header")]
+    pub stamp: StampArg,
+    #[command(flatten)]
+    pub text: TextArgs,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]

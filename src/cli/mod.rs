@@ -22,6 +22,7 @@ pub fn run(cli: args::Cli) -> ExitCode {
         args::Command::Eval(a) => commands::eval::run(*a),
         args::Command::Topics(a) => commands::topics::run(a),
         args::Command::Simulate(a) => commands::simulate::run(a),
+        args::Command::Export(a) => commands::export::run(a),
     };
     match result {
         Ok(code) => ExitCode::from(code),

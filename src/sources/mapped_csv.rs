@@ -318,6 +318,37 @@ pub fn read_mapped_csv(path: &Path, mapping: &CsvMapping) -> Result<Trajectory> 
     Ok(traj)
 }
 
+/// Writes `traj` as CSV with the header `t,x,y,z,qx,qy,qz,qw` (seconds, stamps printed exactly;
+/// identity orientation when it has none), which [`CsvMapping::by_name`] reads back without a mapping.
+pub fn write_csv<W: std::io::Write>(mut out: W, traj: &Trajectory) -> std::io::Result<()> {
+    writeln!(out, "t,x,y,z,qx,qy,qz,qw")?;
+    for i in 0..traj.len() {
+        let t = traj.stamps_ns[i];
+        let p = traj.positions[i];
+        let q = traj
+            .orientations
+            .as_ref()
+            .map(|o| o[i])
+            .unwrap_or_else(UnitQuaternion::identity);
+        let sign = if t < 0 { "-" } else { "" };
+        let a = t.unsigned_abs();
+        writeln!(
+            out,
+            "{sign}{}.{:09},{:.9},{:.9},{:.9},{:.9},{:.9},{:.9},{:.9}",
+            a / 1_000_000_000,
+            a % 1_000_000_000,
+            p.x,
+            p.y,
+            p.z,
+            q.i,
+            q.j,
+            q.k,
+            q.w
+        )?;
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -366,6 +397,28 @@ mod tests {
             e.contains("odom.csv:1:") && e.contains("`pos_x`") && e.contains("columns: t, px"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn export_round_trips_without_a_mapping() {
+        let mut t = Trajectory::new(true);
+        t.push(
+            1_718_460_000_000_000_001,
+            Vector3::new(1.0, -2.0, 3.5),
+            None,
+        );
+        t.push(
+            1_718_460_000_100_000_001,
+            Vector3::new(1.5, -2.0, 3.5),
+            None,
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.csv");
+        write_csv(std::fs::File::create(&path).unwrap(), &t).unwrap();
+        let head = read_header(&path).unwrap();
+        let back = read_mapped_csv(&path, &CsvMapping::by_name(&head.columns).unwrap()).unwrap();
+        assert_eq!(back.stamps_ns, t.stamps_ns);
+        assert_eq!(back.positions, t.positions);
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! One handler per command: turn arguments into a library call, print the result.
 
 pub mod eval;
+pub mod export;
 pub mod simulate;
 pub mod topics;
