@@ -100,6 +100,14 @@ pub enum Error {
     /// A rosbag2 folder cannot be read (metadata.yaml, its files, or the sqlite3 database).
     #[error("{path}: rosbag2 folder: {detail}")]
     Rosbag2 { path: PathBuf, detail: String },
+    /// A text trajectory file (KITTI, EuRoC, CSV) could not be parsed; `hint` says what was expected.
+    #[error("{path}:{line}: {detail}; {hint}")]
+    Text {
+        path: PathBuf,
+        line: usize,
+        detail: String,
+        hint: String,
+    },
 }
 
 impl Error {

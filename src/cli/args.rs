@@ -24,6 +24,33 @@ pub enum Command {
     Batch(BatchArgs),
     /// Build a batch summary from the per-mission results of several folders (sharded runs).
     Merge(MergeArgs),
+    /// Write one topic (or a text trajectory) as TUM or CSV text, e.g. for evo.
+    Export(ExportArgs),
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ExportFormatArg {
+    Tum,
+    Csv,
+}
+
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// The recording (.mcap), or a text trajectory file.
+    pub recording: PathBuf,
+    /// The topic to write (not needed for a text file).
+    #[arg(long, value_name = "TOPIC")]
+    pub topic: Option<String>,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "tum")]
+    pub format: ExportFormatArg,
+    /// Output file (`-` = stdout).
+    pub out: PathBuf,
+    /// Which stamp to use.
+    #[arg(long, value_enum, default_value = "header")]
+    pub stamp: StampArg,
+    #[command(flatten)]
+    pub text: TextArgs,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -73,13 +100,13 @@ pub struct EvalArgs {
     /// Reference topic.
     #[arg(long, value_name = "TOPIC", required_unless_present = "reference_file")]
     pub reference: Option<String>,
-    /// Reference from a TUM file instead of a topic.
+    /// Reference from a text file (TUM, KITTI, EuRoC, CSV) instead of a topic.
     #[arg(long, value_name = "FILE", conflicts_with = "reference")]
     pub reference_file: Option<PathBuf>,
     /// Estimate topic, optionally named (repeatable).
     #[arg(long, value_name = "[NAME=]TOPIC")]
     pub estimate: Vec<String>,
-    /// Estimate from a TUM file, optionally named (repeatable).
+    /// Estimate from a text file (TUM, KITTI, EuRoC, CSV), optionally named (repeatable).
     #[arg(long, value_name = "[NAME=]FILE")]
     pub estimate_file: Vec<String>,
     /// Which stamp to use.
@@ -159,6 +186,37 @@ pub struct EvalArgs {
     /// Replace an existing --annotate output.
     #[arg(long)]
     pub force: bool,
+    /// Reference sensor position relative to the common body point, body frame, metres.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub reference_lever: Option<String>,
+    /// Estimate sensor position relative to the common body point, body frame, metres; the estimate
+    /// is moved onto the reference's point (p − R·(l_est − l_ref)) before alignment (repeatable, NAME= for one estimate).
+    #[arg(long, value_name = "[NAME=]X,Y,Z", allow_hyphen_values = true)]
+    pub estimate_lever: Vec<String>,
+    #[command(flatten)]
+    pub text: TextArgs,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum TextFormatArg {
+    Tum,
+    Kitti,
+    Euroc,
+    Csv,
+}
+
+/// How text trajectory files are read.
+#[derive(Debug, Args)]
+pub struct TextArgs {
+    /// Format of the text files (default: picked per file from extension and content).
+    #[arg(long, value_enum)]
+    pub text_format: Option<TextFormatArg>,
+    /// Column mapping of CSV files, e.g. t=t:us,x=px,y=py,z=pz,qx=qx,qy=qy,qz=qz,qw=qw (time unit s|ms|us|ns).
+    #[arg(long, value_name = "MAPPING")]
+    pub csv: Option<String>,
+    /// KITTI times.txt for KITTI pose files (default: frame i at i·0.1 s).
+    #[arg(long, value_name = "FILE")]
+    pub kitti_times: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -264,4 +322,23 @@ pub struct MergeArgs {
     /// Print nothing but errors.
     #[arg(long, short)]
     pub quiet: bool,
+}
+
+/// Turns the text flags into the library's reading options.
+pub fn text_options(a: &TextArgs) -> trajdrift::Result<trajdrift::sources::text::TextOptions> {
+    use trajdrift::sources::text::TextFormat;
+    Ok(trajdrift::sources::text::TextOptions {
+        format: a.text_format.map(|f| match f {
+            TextFormatArg::Tum => TextFormat::Tum,
+            TextFormatArg::Kitti => TextFormat::Kitti,
+            TextFormatArg::Euroc => TextFormat::Euroc,
+            TextFormatArg::Csv => TextFormat::Csv,
+        }),
+        csv: a
+            .csv
+            .as_deref()
+            .map(trajdrift::sources::mapped_csv::CsvMapping::parse)
+            .transpose()?,
+        kitti_times: a.kitti_times.clone(),
+    })
 }

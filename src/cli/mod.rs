@@ -25,6 +25,7 @@ pub fn run(cli: args::Cli) -> ExitCode {
         args::Command::Simulate(a) => commands::simulate::run(a),
         args::Command::Batch(a) => commands::batch::run(a),
         args::Command::Merge(a) => commands::merge::run(a),
+        args::Command::Export(a) => commands::export::run(a),
     };
     match result {
         Ok(code) => ExitCode::from(code),

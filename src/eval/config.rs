@@ -9,6 +9,7 @@ use crate::align::time_offset::{OffsetMethod, OffsetParams};
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::DriftParams;
 use crate::metrics::lever::LeverCorrection;
+use crate::sources::text::TextOptions;
 use crate::sources::StampSource;
 
 /// The kind of robot: it sets the paper's default ε_min (about 3σ of the reference noise it expects),
@@ -51,7 +52,8 @@ impl Platform {
 pub enum TrajectoryInput {
     /// A topic of the recording.
     Topic(String),
-    /// A TUM text file.
+    /// A text trajectory file: TUM, or any format of [`crate::sources::text`] (picked per file, see
+    /// `EvalConfig::text`). The name is kept from when TUM was the only one.
     TumFile(PathBuf),
 }
 
@@ -140,6 +142,14 @@ pub struct EvalConfig {
     /// `--export-aligned FILE`: write each estimate, shifted onto the reference clock, as TUM
     /// (see [`super::export::aligned_path`] for the names with several estimates).
     pub export_aligned: Option<PathBuf>,
+    /// How `TrajectoryInput::TumFile` inputs are read: every text format (TUM, KITTI, EuRoC, CSV), picked
+    /// per file unless forced.
+    pub text: TextOptions,
+    /// `--reference-lever`: the reference sensor relative to the common body point (body frame, m).
+    pub reference_lever_m: Option<[f64; 3]>,
+    /// `--estimate-lever [NAME=]X,Y,Z`: estimate sensors relative to the common body point; `None` as
+    /// name applies to every estimate without a named one.
+    pub estimate_levers: Vec<(Option<String>, [f64; 3])>,
 }
 
 impl EvalConfig {
@@ -173,6 +183,9 @@ impl EvalConfig {
             t_end: None,
             curvature_dt_max_s: None,
             export_aligned: None,
+            text: TextOptions::default(),
+            reference_lever_m: None,
+            estimate_levers: Vec::new(),
         }
     }
 
@@ -269,6 +282,17 @@ impl EvalConfig {
         }
     }
 
+    /// The lever of estimate `name`: its own `NAME=` entry, else the unnamed one.
+    pub fn estimate_lever(&self, name: &str) -> Option<[f64; 3]> {
+        let named = self
+            .estimate_levers
+            .iter()
+            .find(|(n, _)| n.as_deref() == Some(name));
+        named
+            .or_else(|| self.estimate_levers.iter().find(|(n, _)| n.is_none()))
+            .map(|(_, l)| *l)
+    }
+
     /// Checks every value; the error says which flag is wrong and what it accepts.
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::InvalidArgument(m));
@@ -330,6 +354,28 @@ impl EvalConfig {
         if let Some(dt) = self.time_offset_s {
             if !dt.is_finite() {
                 return bad("--time-offset must be a finite number of seconds".into());
+            }
+        }
+        let levers = self.estimate_levers.iter().map(|(_, l)| l);
+        for l in levers.chain(self.reference_lever_m.as_ref()) {
+            if !l.iter().all(|v| v.is_finite()) {
+                return bad(format!(
+                    "a lever arm must be three finite numbers, got {l:?}"
+                ));
+            }
+        }
+        for (n, _) in &self.estimate_levers {
+            if let Some(n) = n {
+                if !self.estimates.iter().any(|e| &e.name == n) {
+                    return bad(format!(
+                        "--estimate-lever names `{n}`, which is no estimate; estimates: {}",
+                        self.estimates
+                            .iter()
+                            .map(|e| e.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ));
+                }
             }
         }
         Ok(())

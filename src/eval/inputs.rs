@@ -5,7 +5,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::eval::config::{EvalConfig, NamedInput, TrajectoryInput};
-use crate::sources::tum::read_tum;
+use crate::sources::text::{read_text, TextOptions};
 use crate::sources::{ExtractOptions, Progress, Warning};
 use crate::trajectory::Trajectory;
 
@@ -75,7 +75,7 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
     let mut loaded = Vec::with_capacity(all.len());
     for input in all {
         loaded.push(match &input.input {
-            TrajectoryInput::TumFile(p) => load_tum(&input.name, p)?,
+            TrajectoryInput::TumFile(p) => load_tum(&input.name, p, &config.text)?,
             TrajectoryInput::Topic(t) => {
                 let ex = extraction
                     .as_ref()
@@ -104,12 +104,12 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
     })
 }
 
-fn load_tum(name: &str, path: &Path) -> Result<Loaded> {
-    let trajectory = read_tum(path)?;
+fn load_tum(name: &str, path: &Path, text: &TextOptions) -> Result<Loaded> {
+    let (trajectory, format) = read_text(path, text)?;
     Ok(Loaded {
         name: name.to_string(),
         label: path.display().to_string(),
-        type_name: "tum".into(),
+        type_name: format.as_str().into(),
         trajectory,
         dropped_samples: 0,
         geodetic_origin: None,

@@ -3,6 +3,7 @@
 
 pub mod config;
 pub mod export;
+pub mod extrinsics;
 pub mod inputs;
 
 use rayon::prelude::*;
@@ -38,6 +39,7 @@ pub fn evaluate_with_inputs(
 ) -> Result<(Report, Inputs)> {
     config.validate()?;
     let mut inputs = load(config, progress)?;
+    let levers = extrinsics::apply_levers(config, &mut inputs.estimates)?;
     let reference = &mut inputs.reference;
     let t0_ns = reference.trajectory.stamps_ns.first().copied().unwrap_or(0);
     let crop = |v: Option<f64>| {
@@ -86,6 +88,9 @@ pub fn evaluate_with_inputs(
         let (e, w) = r?;
         estimates.push(e);
         warnings.extend(w);
+    }
+    for (e, x) in estimates.iter_mut().zip(levers) {
+        e.extrinsics = x;
     }
     let to_s = |ns: Option<i64>| ns.map(|t| t as f64 * 1e-9);
     let report = Report {
@@ -350,6 +355,7 @@ fn evaluate_estimate(
             dropped_samples: est.dropped_samples,
             time_offset,
             drift_error: drift,
+            extrinsics: None,
         },
         warnings,
     ))

@@ -120,6 +120,23 @@ pub struct EstimateReport {
     pub dropped_samples: u64,
     pub time_offset: TimeOffsetReport,
     pub drift_error: Vec<DriftErrorReport>,
+    /// Known extrinsics applied (`--estimate-lever`/`--reference-lever`): the estimate was moved onto
+    /// the reference's body point before curvature, alignment and Drift Error.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub extrinsics: Option<ExtrinsicsReport>,
+}
+
+/// The lever arms used to move an estimate onto the reference's point of the body.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExtrinsicsReport {
+    /// Estimate sensor relative to the common body point, body frame, metres (0 when not given).
+    pub estimate_lever_m: [f64; 3],
+    /// Reference sensor relative to the common body point, body frame, metres (0 when not given).
+    pub reference_lever_m: [f64; 3],
+    /// `estimate − reference`: every estimate position p became p − R·moved_by_body_m.
+    pub moved_by_body_m: [f64; 3],
+    /// What used the moved trajectory: `curvature, time_offset, drift_error`.
+    pub applied_before: String,
 }
 
 /// The clock offset: what each method found and what was applied.

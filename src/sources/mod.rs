@@ -12,6 +12,10 @@ pub mod rosbag2;
 pub mod tum;
 
 pub use open::open;
+pub mod euroc;
+pub mod kitti;
+pub mod mapped_csv;
+pub mod text;
 
 use crate::error::Result;
 use crate::trajectory::Trajectory;

@@ -56,7 +56,7 @@ pub fn read_tum(path: &Path) -> Result<Trajectory> {
 
 /// Parses the first field of a TUM line as integer nanoseconds without going through `f64`, so that
 /// `1718460000.123456789` keeps every digit.
-fn parse_stamp_ns(line: &str) -> Option<i64> {
+pub(crate) fn parse_stamp_ns(line: &str) -> Option<i64> {
     let field = line.split(|c: char| c.is_whitespace() || c == ',').next()?;
     if field.contains(['e', 'E']) {
         let v: f64 = field.parse().ok()?;

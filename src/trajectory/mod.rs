@@ -4,6 +4,8 @@
 //! written back exactly); the maths work on `f64` seconds relative to a common origin `t0`, which keeps
 //! sub-microsecond resolution over missions of days.
 
+pub mod extrinsics;
+
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// A time-ordered sequence of positions, with orientations when the source carries them.

@@ -11,7 +11,8 @@ use trajdrift::report::{output::write_output, table};
 use trajdrift::sources::StampSource;
 
 use crate::cli::args::{
-    parse_triple, EvalArgs, LeverCorrectionArg, OffsetMethodArg, PlatformArg, StampArg,
+    parse_triple, text_options, EvalArgs, LeverCorrectionArg, OffsetMethodArg, PlatformArg,
+    StampArg,
 };
 use crate::cli::progress::ReadProgress;
 use crate::cli::{EXIT_OK, EXIT_WARNING};
@@ -73,6 +74,26 @@ pub fn config_from_args(a: &EvalArgs) -> Result<EvalConfig> {
     c.t_start = a.t_start;
     c.t_end = a.t_end;
     c.export_aligned = a.export_aligned.clone();
+    c.text = text_options(&a.text)?;
+    c.reference_lever_m = a
+        .reference_lever
+        .as_deref()
+        .map(|s| parse_triple("--reference-lever", s))
+        .transpose()
+        .map_err(|e| anyhow!(trajdrift::Error::InvalidArgument(e)))?;
+    c.estimate_levers = a
+        .estimate_lever
+        .iter()
+        .map(|s| {
+            let (name, l) = match s.split_once('=') {
+                Some((n, l)) => (Some(n.to_string()), l),
+                None => (None, s.as_str()),
+            };
+            parse_triple("--estimate-lever", l)
+                .map(|l| (name, l))
+                .map_err(|e| anyhow!(trajdrift::Error::InvalidArgument(e)))
+        })
+        .collect::<Result<_>>()?;
     Ok(c)
 }
 

@@ -3,5 +3,6 @@
 pub mod batch;
 pub mod eval;
 pub mod merge;
+pub mod export;
 pub mod simulate;
 pub mod topics;

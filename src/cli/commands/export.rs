@@ -1,0 +1,59 @@
+//! `trajdrift export`: writes any source's trajectory as TUM or CSV text (through the [`Source`] trait),
+//! so evo users can take trajdrift's extraction. Written to a temporary file and renamed.
+
+use anyhow::{anyhow, Result};
+
+use trajdrift::report::output::write_output;
+use trajdrift::sources::mapped_csv::write_csv;
+use trajdrift::sources::mcap::McapSource;
+use trajdrift::sources::text::TextSource;
+use trajdrift::sources::tum::write_tum;
+use trajdrift::sources::{ExtractOptions, Source, StampSource};
+
+use crate::cli::args::{text_options, ExportArgs, ExportFormatArg, StampArg};
+use crate::cli::EXIT_OK;
+
+/// Runs the command; returns the exit code.
+pub fn run(a: ExportArgs) -> Result<u8> {
+    let is_mcap = a
+        .recording
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"));
+    // TODO(dispatcher): open ROS 1 bags and rosbag2 folders through the source dispatcher once merged.
+    let (source, topic): (Box<dyn Source>, String) = if is_mcap {
+        let topic = a.topic.clone().ok_or_else(|| {
+            anyhow!(trajdrift::Error::InvalidArgument(format!(
+                "{}: give --topic TOPIC (see `trajdrift topics`)",
+                a.recording.display()
+            )))
+        })?;
+        (Box::new(McapSource::open(&a.recording)?), topic)
+    } else {
+        let s = TextSource::open(&a.recording, text_options(&a.text)?)?;
+        let topic = s.channel();
+        (Box::new(s), topic)
+    };
+    let options = ExtractOptions {
+        stamp: match a.stamp {
+            StampArg::Header => StampSource::Header,
+            StampArg::Log => StampSource::Log,
+        },
+        origin: None,
+    };
+    let extraction = source.extract(std::slice::from_ref(&topic), &options, &|_| {})?;
+    let traj = &extraction
+        .topics
+        .first()
+        .ok_or_else(|| anyhow!("{topic} was not extracted"))?
+        .trajectory;
+    let mut bytes = Vec::new();
+    match a.format {
+        ExportFormatArg::Tum => write_tum(&mut bytes, traj)?,
+        ExportFormatArg::Csv => write_csv(&mut bytes, traj)?,
+    }
+    write_output(&a.out, &bytes)?;
+    for w in &extraction.warnings {
+        eprintln!("warning [{}]: {}", w.code, w.message);
+    }
+    Ok(EXIT_OK)
+}
