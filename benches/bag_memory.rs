@@ -24,8 +24,22 @@ fn write_bag(path: &Path, mission: &Mission, bulk_bytes: usize) {
     let ec = w.add_connection("/estimate/odom", "nav_msgs/Odometry");
     let bc = w.add_connection("/camera/raw", "sensor_msgs/Image");
     let mut events: Vec<(i64, u8, usize)> = Vec::new();
-    events.extend(mission.reference.stamps_ns.iter().enumerate().map(|(i, &t)| (t, 0, i)));
-    events.extend(mission.estimate.stamps_ns.iter().enumerate().map(|(i, &t)| (t, 1, i)));
+    events.extend(
+        mission
+            .reference
+            .stamps_ns
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| (t, 0, i)),
+    );
+    events.extend(
+        mission
+            .estimate
+            .stamps_ns
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| (t, 1, i)),
+    );
     let t0 = mission.config.start_time_ns;
     events.extend(
         (0..(mission.duration_s * 10.0) as usize).map(|i| (t0 + i as i64 * 100_000_000 + 1, 2, i)),
@@ -42,7 +56,11 @@ fn write_bag(path: &Path, mission: &Mission, bulk_bytes: usize) {
                 let p = mission.reference.positions[i];
                 let m = PointStamped {
                     header,
-                    point: Point { x: p.x, y: p.y, z: p.z },
+                    point: Point {
+                        x: p.x,
+                        y: p.y,
+                        z: p.z,
+                    },
                 };
                 (rc, ros1::encode_point_stamped(i as u32, &m))
             }
@@ -52,9 +70,18 @@ fn write_bag(path: &Path, mission: &Mission, bulk_bytes: usize) {
                     header,
                     ..Default::default()
                 };
-                m.pose.pose.position = Point { x: p.x, y: p.y, z: p.z };
+                m.pose.pose.position = Point {
+                    x: p.x,
+                    y: p.y,
+                    z: p.z,
+                };
                 if let Some(q) = mission.estimate.orientations.as_ref().map(|o| o[i]) {
-                    m.pose.pose.orientation = Quaternion { x: q.i, y: q.j, z: q.k, w: q.w };
+                    m.pose.pose.orientation = Quaternion {
+                        x: q.i,
+                        y: q.j,
+                        z: q.k,
+                        w: q.w,
+                    };
                 }
                 (ec, ros1::encode_odometry(i as u32, &m))
             }
@@ -73,12 +100,21 @@ fn eval(path: &Path, dir: &Path) -> (u64, f64) {
     let status = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
         .args(["eval", "--quiet", "--platform", "wheeled"])
         .arg(path)
-        .args(["--reference", "/reference/position", "--estimate", "/estimate/odom", "--json"])
+        .args([
+            "--reference",
+            "/reference/position",
+            "--estimate",
+            "/estimate/odom",
+            "--json",
+        ])
         .arg(dir.join("bag-report.json"))
         .status()
         .expect("run trajdrift eval");
     let secs = start.elapsed().as_secs_f64();
-    assert!(status.code().is_some_and(|c| c == 0 || c == 3), "eval failed");
+    assert!(
+        status.code().is_some_and(|c| c == 0 || c == 3),
+        "eval failed"
+    );
     // SAFETY: getrusage only writes into the struct we pass.
     let maxrss_kib = unsafe {
         let mut ru: libc::rusage = std::mem::zeroed();
@@ -115,6 +151,9 @@ fn main() {
         peaks.push(peak);
     }
     let growth = peaks[1] as f64 - peaks[0] as f64;
-    println!("bag memory: growth small → large {:.1} MiB", growth / 1048576.0);
+    println!(
+        "bag memory: growth small → large {:.1} MiB",
+        growth / 1048576.0
+    );
     assert!(growth < 8.0 * 1048576.0, "peak memory grows with the bag");
 }

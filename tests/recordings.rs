@@ -31,8 +31,16 @@ fn extract(path: &Path, topics: &[&str]) -> Extraction {
 fn assert_same(a: &Extraction, b: &Extraction, what: &str) {
     assert_eq!(a.topics.len(), b.topics.len());
     for (x, y) in a.topics.iter().zip(&b.topics) {
-        assert_eq!(x.trajectory.stamps_ns, y.trajectory.stamps_ns, "{what} {}", x.topic);
-        assert_eq!(x.trajectory.positions, y.trajectory.positions, "{what} {}", x.topic);
+        assert_eq!(
+            x.trajectory.stamps_ns, y.trajectory.stamps_ns,
+            "{what} {}",
+            x.topic
+        );
+        assert_eq!(
+            x.trajectory.positions, y.trajectory.positions,
+            "{what} {}",
+            x.topic
+        );
         assert_eq!(
             x.trajectory.orientations, y.trajectory.orientations,
             "{what} {}",
@@ -142,7 +150,8 @@ fn write_bag(path: &Path, compression: BagCompression, n: u32) {
             ..Default::default()
         };
         o.pose.pose.position = point;
-        w.write(e, ns as u64, &ros1::encode_odometry(i, &o)).unwrap();
+        w.write(e, ns as u64, &ros1::encode_odometry(i, &o))
+            .unwrap();
         let mut pose = PoseStamped {
             header,
             ..Default::default()
@@ -200,9 +209,7 @@ fn ros1_in_mcap_reads_like_the_bag() {
                 &|_| {},
                 &mut |c, m| {
                     let id = *ids.entry(c.id).or_insert_with(|| {
-                        let s = w
-                            .add_schema(&c.schema_name, "ros1msg", b"")
-                            .unwrap();
+                        let s = w.add_schema(&c.schema_name, "ros1msg", b"").unwrap();
                         w.add_channel(s, &c.topic, "ros1", &Default::default())
                             .unwrap()
                     });
@@ -230,12 +237,21 @@ fn unknown_bag_compression_is_a_one_line_error() {
     let p = dir.path().join("zstd.bag");
     write_bag(&p, BagCompression::Other("zstd".into()), 10);
     let err = open(&p)
-        .and_then(|s| s.extract(&["/estimate/odom".into()], &ExtractOptions::default(), &|_| {}))
+        .and_then(|s| {
+            s.extract(
+                &["/estimate/odom".into()],
+                &ExtractOptions::default(),
+                &|_| {},
+            )
+        })
         .err()
         .unwrap()
         .to_string();
     assert!(!err.contains('\n'));
-    assert!(err.contains("zstd.bag") && err.contains("compression `zstd`"), "{err}");
+    assert!(
+        err.contains("zstd.bag") && err.contains("compression `zstd`"),
+        "{err}"
+    );
     assert!(err.contains("rosbag decompress"), "{err}");
 }
 
@@ -259,5 +275,8 @@ fn rosbag2_folder_with_a_missing_file_is_a_one_line_error() {
     )
     .unwrap();
     let err = open(dir2.path()).err().unwrap().to_string();
-    assert!(err.contains("a_0.db3, which is missing") && !err.contains('\n'), "{err}");
+    assert!(
+        err.contains("a_0.db3, which is missing") && !err.contains('\n'),
+        "{err}"
+    );
 }

@@ -39,7 +39,9 @@ pub struct BagWriter<W: Write + Seek> {
 }
 
 fn field(name: &str, value: &[u8]) -> Vec<u8> {
-    let mut f = ((name.len() + 1 + value.len()) as u32).to_le_bytes().to_vec();
+    let mut f = ((name.len() + 1 + value.len()) as u32)
+        .to_le_bytes()
+        .to_vec();
     f.extend_from_slice(name.as_bytes());
     f.push(b'=');
     f.extend_from_slice(value);
@@ -63,7 +65,11 @@ fn record(out: &mut Vec<u8>, header: &[Vec<u8>], data: &[u8]) {
 
 impl<W: Write + Seek> BagWriter<W> {
     /// Starts a bag in `out` with chunks of about `chunk_target` bytes (rosbag's default: 768 KiB).
-    pub fn new(mut out: W, compression: BagCompression, chunk_target: usize) -> std::io::Result<Self> {
+    pub fn new(
+        mut out: W,
+        compression: BagCompression,
+        chunk_target: usize,
+    ) -> std::io::Result<Self> {
         out.write_all(MAGIC)?;
         let mut w = BagWriter {
             out,
@@ -85,7 +91,10 @@ impl<W: Write + Seek> BagWriter<W> {
             field("op", &[op::BAG_HEADER]),
             field("index_pos", &index_pos.to_le_bytes()),
             field("conn_count", &(self.connections.len() as u32).to_le_bytes()),
-            field("chunk_count", &(self.chunk_infos.len() as u32).to_le_bytes()),
+            field(
+                "chunk_count",
+                &(self.chunk_infos.len() as u32).to_le_bytes(),
+            ),
         ];
         let hlen: usize = header.iter().map(Vec::len).sum();
         // The bag header record is padded to 4096 bytes so it can be rewritten in place.
