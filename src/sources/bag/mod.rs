@@ -94,9 +94,9 @@ impl BagSource {
             match f.op() {
                 Some(op::CONNECTION) => {
                     let conn = f.u32("conn")?;
-                    if !conns.contains_key(&conn) {
+                    if let std::collections::hash_map::Entry::Vacant(e) = conns.entry(conn) {
                         let c = connection(&f, &data, channels.len()).ok()?;
-                        conns.insert(conn, c.id);
+                        e.insert(c.id);
                         channels.push(c);
                     }
                 }
@@ -134,11 +134,11 @@ impl BagSource {
                 let conn = f
                     .u32("conn")
                     .ok_or_else(|| corrupt(&self.path, "connection without `conn`".into()))?;
-                if !conns.by_conn.contains_key(&conn) {
+                if let std::collections::hash_map::Entry::Vacant(e) = conns.by_conn.entry(conn) {
                     let c = connection(f, data, out.channels.len())
                         .map_err(|d| corrupt(&self.path, d))?;
                     let selected = select(&c);
-                    conns.by_conn.insert(conn, (out.channels.len(), selected));
+                    e.insert((out.channels.len(), selected));
                     out.channels.push(c);
                 }
             }

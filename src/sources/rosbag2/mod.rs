@@ -125,7 +125,7 @@ impl Recording for Rosbag2Source {
         progress: Progress<'_>,
         on_message: OnMessage<'_>,
     ) -> Result<StreamOutcome> {
-        let selected: Vec<bool> = self.channels.iter().map(|c| select(c)).collect();
+        let selected: Vec<bool> = self.channels.iter().map(&mut *select).collect();
         let by_topic: HashMap<&str, usize> = self
             .channels
             .iter()
