@@ -13,5 +13,6 @@ pub mod sample;
 pub mod tf;
 
 pub use sample::{
-    decode_message, decode_sample, message_kind, Encoding, supported_types, MessageKind, Sample, SamplePosition,
+    decode_message, decode_sample, message_kind, supported_types, Encoding, MessageKind, Sample,
+    SamplePosition,
 };

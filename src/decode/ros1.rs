@@ -324,7 +324,10 @@ mod tests {
             z: 0.5,
         };
         let bytes = encode_odometry(7, &m);
-        assert_eq!(bytes.len(), 4 + 8 + 8 + 13 + 7 * 8 + 36 * 8 + 6 * 8 + 36 * 8);
+        assert_eq!(
+            bytes.len(),
+            4 + 8 + 8 + 13 + 7 * 8 + 36 * 8 + 6 * 8 + 36 * 8
+        );
         assert_eq!(odometry(&bytes).unwrap(), m);
         for cut in 0..bytes.len() {
             assert!(odometry(&bytes[..cut]).is_err(), "cut {cut}");

@@ -156,7 +156,11 @@ pub fn decode_sample(kind: MessageKind, data: &[u8]) -> Result<Sample, String> {
 }
 
 /// Decodes one message of `kind` serialized with `encoding`.
-pub fn decode_message(kind: MessageKind, encoding: Encoding, data: &[u8]) -> Result<Sample, String> {
+pub fn decode_message(
+    kind: MessageKind,
+    encoding: Encoding,
+    data: &[u8],
+) -> Result<Sample, String> {
     let local = |p: ros2_msgs::Point| SamplePosition::Local(Vector3::new(p.x, p.y, p.z));
     // The ROS 1 reader yields the same structs as CDR decoding.
     macro_rules! read {
@@ -169,7 +173,10 @@ pub fn decode_message(kind: MessageKind, encoding: Encoding, data: &[u8]) -> Res
     }
     Ok(match kind {
         MessageKind::PoseWithCovarianceStamped => {
-            let m = read!(PoseWithCovarianceStamped, ros1::pose_with_covariance_stamped);
+            let m = read!(
+                PoseWithCovarianceStamped,
+                ros1::pose_with_covariance_stamped
+            );
             Sample {
                 stamp_ns: m.header.stamp.to_ns(),
                 position: local(m.pose.pose.position),

@@ -94,9 +94,9 @@ impl BagSource {
             match f.op() {
                 Some(op::CONNECTION) => {
                     let conn = f.u32("conn")?;
-                    if !conns.contains_key(&conn) {
+                    if let std::collections::hash_map::Entry::Vacant(e) = conns.entry(conn) {
                         let c = connection(&f, &data, channels.len()).ok()?;
-                        conns.insert(conn, c.id);
+                        e.insert(c.id);
                         channels.push(c);
                     }
                 }
@@ -134,11 +134,11 @@ impl BagSource {
                 let conn = f
                     .u32("conn")
                     .ok_or_else(|| corrupt(&self.path, "connection without `conn`".into()))?;
-                if !conns.by_conn.contains_key(&conn) {
+                if let std::collections::hash_map::Entry::Vacant(e) = conns.by_conn.entry(conn) {
                     let c = connection(f, data, out.channels.len())
                         .map_err(|d| corrupt(&self.path, d))?;
                     let selected = select(&c);
-                    conns.by_conn.insert(conn, (out.channels.len(), selected));
+                    e.insert((out.channels.len(), selected));
                     out.channels.push(c);
                 }
             }
@@ -182,7 +182,11 @@ fn corrupt(path: &Path, detail: String) -> Error {
 }
 
 /// A channel from a connection record (`data` holds the connection header: topic, type, ...).
-fn connection(f: &Fields<'_>, data: &[u8], index: usize) -> std::result::Result<ChannelInfo, String> {
+fn connection(
+    f: &Fields<'_>,
+    data: &[u8],
+    index: usize,
+) -> std::result::Result<ChannelInfo, String> {
     let id = u16::try_from(index).map_err(|_| "more than 65536 connections".to_string())?;
     let d = Fields::parse(data)?;
     Ok(ChannelInfo {
@@ -198,12 +202,19 @@ fn connection(f: &Fields<'_>, data: &[u8], index: usize) -> std::result::Result<
 }
 
 /// Decompresses a chunk's data into `out`.
-fn decompress(compression: &[u8], data: &[u8], size: usize, out: &mut Vec<u8>) -> std::io::Result<()> {
+fn decompress(
+    compression: &[u8],
+    data: &[u8],
+    size: usize,
+    out: &mut Vec<u8>,
+) -> std::io::Result<()> {
     out.clear();
     // `size` comes from the file: reserve no more than a sane chunk before the data proves it.
     out.reserve(size.min(256 << 20));
     match compression {
-        b"bz2" => bzip2::read::BzDecoder::new(data).read_to_end(out).map(|_| ()),
+        b"bz2" => bzip2::read::BzDecoder::new(data)
+            .read_to_end(out)
+            .map(|_| ()),
         b"lz4" => lz4_flex::frame::FrameDecoder::new(data)
             .read_to_end(out)
             .map(|_| ()),
@@ -255,9 +266,8 @@ impl Recording for BagSource {
             };
             let record_start = pos;
             pos += 8 + header.len() as u64 + data_len as u64;
-            let f = Fields::parse(&header).map_err(|d| {
-                corrupt(path, format!("record header at byte {record_start}: {d}"))
-            })?;
+            let f = Fields::parse(&header)
+                .map_err(|d| corrupt(path, format!("record header at byte {record_start}: {d}")))?;
             let wanted = matches!(
                 f.op(),
                 Some(op::CHUNK) | Some(op::CONNECTION) | Some(op::MESSAGE_DATA)
@@ -283,17 +293,22 @@ impl Recording for BagSource {
                     });
                 }
                 let size = f.u32("size").unwrap_or(0) as usize;
-                decompress(compression, &data, size, &mut chunk).map_err(|e| {
-                    corrupt(path, format!("chunk at byte {record_start}: {e}"))
-                })?;
-                let inner = records::split_records(&chunk).map_err(|d| {
-                    corrupt(path, format!("chunk at byte {record_start}: {d}"))
-                })?;
+                decompress(compression, &data, size, &mut chunk)
+                    .map_err(|e| corrupt(path, format!("chunk at byte {record_start}: {e}")))?;
+                let inner = records::split_records(&chunk)
+                    .map_err(|d| corrupt(path, format!("chunk at byte {record_start}: {d}")))?;
                 for (f, d) in &inner {
                     self.handle(f, d, &mut conns, &mut out, &mut select, &mut on_message)?;
                 }
             } else {
-                self.handle(&f, &data, &mut conns, &mut out, &mut select, &mut on_message)?;
+                self.handle(
+                    &f,
+                    &data,
+                    &mut conns,
+                    &mut out,
+                    &mut select,
+                    &mut on_message,
+                )?;
             }
             if pos - last_progress >= PROGRESS_STEP {
                 last_progress = pos;

@@ -114,7 +114,9 @@ pub fn split_records(mut bytes: &[u8]) -> std::result::Result<Vec<(Fields<'_>, &
     while !bytes.is_empty() {
         let hlen = read_u32_slice(&mut bytes)? as usize;
         if hlen > bytes.len() {
-            return Err(format!("record header of {hlen} bytes past the chunk's end"));
+            return Err(format!(
+                "record header of {hlen} bytes past the chunk's end"
+            ));
         }
         let (h, rest) = bytes.split_at(hlen);
         bytes = rest;
@@ -141,7 +143,11 @@ pub enum Next {
 
 /// Reads the next top-level record's header into `header` (the caller then reads or skips
 /// `data_len` bytes).
-pub fn read_record<R: Read>(r: &mut R, header: &mut Vec<u8>, path: &std::path::Path) -> Result<Next> {
+pub fn read_record<R: Read>(
+    r: &mut R,
+    header: &mut Vec<u8>,
+    path: &std::path::Path,
+) -> Result<Next> {
     let mut len = [0u8; 4];
     match read_full(r, &mut len).map_err(|e| Error::io(path, e))? {
         0 => return Ok(Next::End),

@@ -60,7 +60,10 @@ pub fn read(dir: &Path) -> Result<Metadata> {
             "cannot read metadata.yaml ({e}); pass a rosbag2 folder, a .bag or a .mcap file"
         ))
     })?;
-    let file: File = serde_yaml_ng::from_str(&text)
-        .map_err(|e| bad(format!("metadata.yaml: {e}; re-create it with `ros2 bag reindex`")))?;
+    let file: File = serde_yaml_ng::from_str(&text).map_err(|e| {
+        bad(format!(
+            "metadata.yaml: {e}; re-create it with `ros2 bag reindex`"
+        ))
+    })?;
     Ok(file.rosbag2_bagfile_information)
 }

@@ -60,7 +60,9 @@ impl Rosbag2Source {
             )));
         }
         if meta.relative_file_paths.is_empty() {
-            return Err(bad("metadata.yaml names no file; re-create it with `ros2 bag reindex`".into()));
+            return Err(bad(
+                "metadata.yaml names no file; re-create it with `ros2 bag reindex`".into(),
+            ));
         }
         let mut files = Vec::new();
         let mut size = 0;
@@ -123,7 +125,7 @@ impl Recording for Rosbag2Source {
         progress: Progress<'_>,
         on_message: OnMessage<'_>,
     ) -> Result<StreamOutcome> {
-        let selected: Vec<bool> = self.channels.iter().map(|c| select(c)).collect();
+        let selected: Vec<bool> = self.channels.iter().map(&mut *select).collect();
         let by_topic: HashMap<&str, usize> = self
             .channels
             .iter()
@@ -151,7 +153,13 @@ impl Recording for Rosbag2Source {
                                 return Ok(());
                             };
                             let g = &self.channels[i];
-                            on_message(g, &MessageRef { channel_id: g.id, ..*m })
+                            on_message(
+                                g,
+                                &MessageRef {
+                                    channel_id: g.id,
+                                    ..*m
+                                },
+                            )
                         },
                     )?;
                     if o.truncated_at.is_some() {

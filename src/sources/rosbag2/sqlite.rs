@@ -70,7 +70,11 @@ pub fn for_each_message(
     while let Some(row) = rows.next().map_err(bad)? {
         let topic_id: i64 = row.get(0).map_err(bad)?;
         let stamp: i64 = row.get(1).map_err(bad)?;
-        let data = row.get_ref(2).map_err(bad)?.as_blob().map_err(|e| bad(e.into()))?;
+        let data = row
+            .get_ref(2)
+            .map_err(bad)?
+            .as_blob()
+            .map_err(|e| bad(e.into()))?;
         let Some(&i) = route.get(&topic_id) else {
             continue;
         };
