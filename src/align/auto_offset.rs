@@ -168,7 +168,12 @@ pub fn auto_time_offset(
     use rayon::prelude::*;
     let runs: Vec<(OffsetMethod, Result<OffsetEstimate>)> = AUTO_METHODS
         .par_iter()
-        .map(|&m| (m, estimate_time_offset(m, ref_t, ref_p, est_t, est_p, params)))
+        .map(|&m| {
+            (
+                m,
+                estimate_time_offset(m, ref_t, ref_p, est_t, est_p, params),
+            )
+        })
         .collect();
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
     let mean_speed_mps = moving_speed(ref_t, ref_p, gap).map(|m| m.0);
@@ -301,8 +306,14 @@ mod tests {
         let sw = est(OffsetMethod::Speed, 0.1, false);
         let c = est(OffsetMethod::SignedCurvature, 0.2, true);
         let cw = est(OffsetMethod::SignedCurvature, 0.2, false);
-        assert_eq!(decide(Some(&s), Some(&cw), Some(1.0)).verdict, Verdict::SpeedOnly);
-        assert_eq!(decide(Some(&s), None, Some(1.0)).verdict, Verdict::SpeedOnly);
+        assert_eq!(
+            decide(Some(&s), Some(&cw), Some(1.0)).verdict,
+            Verdict::SpeedOnly
+        );
+        assert_eq!(
+            decide(Some(&s), None, Some(1.0)).verdict,
+            Verdict::SpeedOnly
+        );
         let d = decide(Some(&sw), Some(&c), Some(1.0));
         assert_eq!(d.verdict, Verdict::CurvatureOnly);
         assert_eq!(d.applied, Some(OffsetMethod::SignedCurvature));

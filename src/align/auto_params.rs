@@ -89,7 +89,11 @@ pub fn reference_noise(times: &[f64], positions: &[Vector3<f64>]) -> Option<f64>
 
 /// Mean and 10th percentile of the reference's 2 s windowed speed while moving (above
 /// [`MOVING_SPEED_MPS`]); `None` when it never moves.
-pub fn moving_speed(times: &[f64], positions: &[Vector3<f64>], max_gap_s: f64) -> Option<(f64, f64)> {
+pub fn moving_speed(
+    times: &[f64],
+    positions: &[Vector3<f64>],
+    max_gap_s: f64,
+) -> Option<(f64, f64)> {
     let mut v: Vec<f64> = speed_profile(times, positions, 2.0, max_gap_s)
         .into_iter()
         .map(|s| s.speed)
@@ -119,7 +123,9 @@ pub fn auto_params(
     let path_hi = (min_window_m / 5.0).max(PATH_EPS_MIN_M);
     let path_eps_m = (s * (2.0 / PATH_INFLATION).sqrt()).clamp(PATH_EPS_MIN_M, path_hi);
     let curvature_dt_max_s = match motion {
-        Some((_, slow)) => (1.5 * curvature_eps_m / slow).clamp(base_dt_max_s, DT_MAX_CAP_S.max(base_dt_max_s)),
+        Some((_, slow)) => {
+            (1.5 * curvature_eps_m / slow).clamp(base_dt_max_s, DT_MAX_CAP_S.max(base_dt_max_s))
+        }
         None => base_dt_max_s,
     };
     AutoParams {

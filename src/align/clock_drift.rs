@@ -2,7 +2,8 @@
 //!
 //! A single Δt is the whole story only when both clocks tick at the same rate. On a 2-hour mission a
 //! 10 ppm drift moves Δt by 72 ms from start to end, so the offset is measured again on the first
-//! and the last third of the overlap. Each third is searched around the whole mission's Δt (the
+//! and the last third of the overlap (the reference cut to it, the estimate a little wider). Each
+//! third is searched around the whole mission's Δt (the
 //! estimate is shifted by it first, then a residual within ±[`THIRD_SEARCH_S`] is found with the
 //! same method), and the drift is the rate error of the estimate's clock between the thirds'
 //! mid-times, −(Δt_last − Δt_first)/(t_last − t_first), in parts per million: positive when the
@@ -13,6 +14,11 @@ use nalgebra::Vector3;
 
 use crate::align::time_offset::{estimate_time_offset, OffsetMethod, OffsetParams};
 
+/// Scatter of one third's Δt measured on the simulated missions of 2–6 minutes, seconds (errors of
+/// 10–50 ms per third with speed, see tests/time_offset_auto.rs `thirds_table`): the drift is only
+/// resolved to about 2·this/(time between the thirds), hundreds of ppm on a few minutes, ~10 ppm
+/// on two hours.
+pub const THIRD_SCATTER_S: f64 = 0.03;
 /// Residual offset searched on each third around the whole mission's Δt, seconds.
 pub const THIRD_SEARCH_S: f64 = 2.0;
 
@@ -29,6 +35,9 @@ pub struct ClockDrift {
     /// −(Δt_last − Δt_first)/(t_last − t_first), parts per million (positive: the estimate's clock
     /// runs fast).
     pub drift_ppm: f64,
+    /// The smallest drift this mission resolves, 2·[`THIRD_SCATTER_S`]/(t_last − t_first), ppm: a
+    /// `drift_ppm` below it is not evidence of drift.
+    pub resolution_ppm: f64,
 }
 
 /// Measures Δt on the first and last thirds of the overlap with `method`, around `offset_s` (the
@@ -55,7 +64,13 @@ pub fn clock_drift(
         ..*params
     };
     let on = |lo: f64, hi: f64| -> Option<f64> {
-        let (ri, ei) = (range(ref_t, lo, hi), range(&shifted, lo, hi));
+        // Only the reference is cut to the third: the estimate reaches past it on both sides, so
+        // every lag searched sees a whole third of both signals (no edge effects on one side only).
+        let margin = 2.0 * THIRD_SEARCH_S + params.speed_window_s;
+        let (ri, ei) = (
+            range(ref_t, lo, hi),
+            range(&shifted, lo - margin, hi + margin),
+        );
         let r = estimate_time_offset(
             method,
             &ref_t[ri.clone()],
@@ -76,6 +91,7 @@ pub fn clock_drift(
         first_mid_s: m0,
         last_mid_s: m1,
         drift_ppm: -(last - first) / (m1 - m0) * 1e6,
+        resolution_ppm: 2.0 * THIRD_SCATTER_S / (m1 - m0) * 1e6,
     })
 }
 

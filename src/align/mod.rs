@@ -1,10 +1,10 @@
 //! Time alignment: find the clock offset Δt between an estimate and its reference from positions alone.
 
+pub mod auto_offset;
+pub mod auto_params;
+pub mod clock_drift;
 pub mod curvature;
 pub mod grid;
 pub mod speed;
 pub mod time_offset;
 pub mod xcorr;
-pub mod auto_offset;
-pub mod auto_params;
-pub mod clock_drift;

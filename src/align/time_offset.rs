@@ -192,12 +192,10 @@ pub fn estimate_time_offset(
                     .map(|s| (s.t, s.signed_curvature()))
                     .unzip()
             }
-            OffsetMethod::Speed => {
-                speed_profile(t, p, params.speed_window_s, gap)
-                    .into_iter()
-                    .map(|s| (s.t, s.speed))
-                    .unzip()
-            }
+            OffsetMethod::Speed => speed_profile(t, p, params.speed_window_s, gap)
+                .into_iter()
+                .map(|s| (s.t, s.speed))
+                .unzip(),
         };
         if s.0.len() < 3 {
             return Err(Error::TooFewSamples {
@@ -316,9 +314,7 @@ pub fn estimate_time_offset(
         status,
         overlap_fraction,
         margin: lobe.margin,
-        rival_offset_s: lobe
-            .rival
-            .map(|i| (coarse.lag(i) - shift) as f64 * h),
+        rival_offset_s: lobe.rival.map(|i| (coarse.lag(i) - shift) as f64 * h),
         defined_fraction,
     })
 }
@@ -367,7 +363,13 @@ struct Lobe {
 /// widened by its own width on each side and (b) the descent from the peak to the first real
 /// minimum on each side (ripples below 5 % of P are walked through; at most 20 s), and is at least
 /// ±`min_lobe_s`: the broad shoulders of a speed correlation are not rivals.
-fn peak_separation(ncc: &[f64], eligible: &[usize], i_peak: usize, step: f64, min_lobe_s: f64) -> Lobe {
+fn peak_separation(
+    ncc: &[f64],
+    eligible: &[usize],
+    i_peak: usize,
+    step: f64,
+    min_lobe_s: f64,
+) -> Lobe {
     let weak = |prominence: f64| Lobe {
         separation: 0.0,
         prominence,

@@ -263,7 +263,12 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub force: bool,
     /// Clock rate error of the estimate, ppm (positive: its clock runs fast).
-    #[arg(long, value_name = "PPM", default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "PPM",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub clock_drift_ppm: f64,
 }
 

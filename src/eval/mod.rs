@@ -15,8 +15,8 @@ use crate::align::time_offset::{OffsetEstimate, OffsetMethod, OffsetStatus};
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult};
 use crate::report::json::{
-    AutoParameters, DriftErrorReport, EstimateReport, Input, OffsetMethodReport, Parameters, Report,
-    TimeOffsetReport, Tool, TopicReport, WindowReport, SCHEMA_VERSION,
+    AutoParameters, DriftErrorReport, EstimateReport, Input, OffsetMethodReport, Parameters,
+    Report, TimeOffsetReport, Tool, TopicReport, WindowReport, SCHEMA_VERSION,
 };
 use crate::sources::{Progress, Warning};
 use config::EvalConfig;
@@ -61,8 +61,17 @@ pub fn evaluate_with_inputs(
     // `--platform auto`: ε and the curvature Δt_max from the reference's own noise and speed.
     let auto = {
         let t = reference.trajectory.times_s(t0_ns);
-        let min_window = config.windows_m.iter().copied().fold(f64::INFINITY, f64::min);
-        auto_params(&t, &reference.trajectory.positions, min_window, config.dt_max_s)
+        let min_window = config
+            .windows_m
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        auto_params(
+            &t,
+            &reference.trajectory.positions,
+            min_window,
+            config.dt_max_s,
+        )
     };
     let auto_names = config.auto_parameter_names();
     let resolved = config.resolved(&auto);
@@ -215,6 +224,7 @@ fn evaluate_estimate(
             first_third_s: None,
             last_third_s: None,
             drift_ppm: None,
+            drift_resolution_ppm: None,
         },
         None => {
             let params = config.offset_params();
@@ -223,7 +233,11 @@ fn evaluate_estimate(
                 Err(e @ Error::NoOverlap { .. }) => return Err(clone_no_overlap(&e, &est.label)),
                 Err(e) => return Err(relabel(e, &est.label)),
             };
-            let methods = auto.runs.iter().map(|(m, r)| method_report(*m, r)).collect();
+            let methods = auto
+                .runs
+                .iter()
+                .map(|(m, r)| method_report(*m, r))
+                .collect();
             // The answer of the requested method (`auto`: the combined one) and why.
             let (chosen, reason, implied_lever) = if config.offset_method == OffsetMethod::Auto {
                 warnings.extend(auto.warnings.iter().map(|w| Warning {
@@ -241,13 +255,25 @@ fn evaluate_estimate(
                     .iter()
                     .find(|(m, _)| *m == config.offset_method)
                     .map(|(_, r)| r.as_ref().map(|o| *o));
-                (r, format!("--offset-method {}", config.offset_method.as_str()), None)
+                (
+                    r,
+                    format!("--offset-method {}", config.offset_method.as_str()),
+                    None,
+                )
             };
             match chosen {
                 Some(Ok(o)) if o.status == OffsetStatus::Ok => {
-                    let drift = clock_drift(
-                        o.method, &ref_t, ref_p, &est_t, est_p, &params, o.offset_s,
-                    );
+                    let drift =
+                        clock_drift(o.method, &ref_t, ref_p, &est_t, est_p, &params, o.offset_s);
+                    if let Some(d) = drift.filter(|d| d.drift_ppm.abs() > 2.0 * d.resolution_ppm) {
+                        warnings.push(Warning {
+                            code: "clock_drift_suspected".into(),
+                            message: format!(
+                                "{}: Δt is {:+.3} s on the first third and {:+.3} s on the last ({:+.0} ppm, resolution {:.0} ppm): a single offset does not fit the whole mission; crop with --t-start/--t-end",
+                                est.name, d.first_third_s, d.last_third_s, d.drift_ppm, d.resolution_ppm
+                            ),
+                        });
+                    }
                     TimeOffsetReport {
                         method: o.method.as_str().into(),
                         offset_s: o.offset_s,
@@ -261,6 +287,7 @@ fn evaluate_estimate(
                         first_third_s: drift.map(|d| d.first_third_s),
                         last_third_s: drift.map(|d| d.last_third_s),
                         drift_ppm: drift.map(|d| d.drift_ppm),
+                        drift_resolution_ppm: drift.map(|d| d.resolution_ppm),
                     }
                 }
                 Some(Err(e @ Error::NoOverlap { .. })) => {
@@ -301,6 +328,7 @@ fn evaluate_estimate(
                         first_third_s: None,
                         last_third_s: None,
                         drift_ppm: None,
+                        drift_resolution_ppm: None,
                     }
                 }
             }

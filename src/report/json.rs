@@ -168,6 +168,10 @@ pub struct TimeOffsetReport {
     pub last_third_s: Option<f64>,
     #[serde(default)]
     pub drift_ppm: Option<f64>,
+    /// The smallest drift the mission resolves, ppm (thirds scatter by tens of ms: hundreds of ppm
+    /// on a few minutes, ~10 ppm on two hours).
+    #[serde(default)]
+    pub drift_resolution_ppm: Option<f64>,
 }
 
 /// One time-offset method's answer.
