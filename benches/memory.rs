@@ -61,6 +61,8 @@ fn main() {
 /// figure `/usr/bin/time -v` prints as "Maximum resident set size") and the wall time.
 fn measure(mut cmd: Command) -> (Option<i32>, u64, f64) {
     let start = Instant::now();
+    // Reaped by wait4 below (which also gives this child's own rusage), not by Child::wait.
+    #[allow(clippy::zombie_processes)]
     let child = cmd.spawn().expect("run trajdrift");
     let pid = child.id() as libc::pid_t;
     // SAFETY: wait4 only writes into the status and rusage we pass; the child is ours.
