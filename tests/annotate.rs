@@ -206,6 +206,23 @@ fn annotated_fixtures_keep_every_record_and_add_the_results() {
         let report = annotate(&input, &out, &[]);
         let counts = check(&input, &out, &report);
         assert_eq!(compression(&out), compression(&input), "{m}");
+        // `trajdrift topics` lists the new channels with their counts.
+        let topics = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+            .arg("topics")
+            .arg(&out)
+            .args(["--json", "-"])
+            .output()
+            .unwrap();
+        let topics: serde_json::Value = serde_json::from_slice(&topics.stdout).unwrap();
+        for (t, n) in &counts {
+            let listed = topics
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|x| x["topic"] == t.as_str())
+                .unwrap_or_else(|| panic!("{m}: topics does not list {t}"));
+            assert_eq!(listed["message_count"].as_u64(), Some(*n as u64), "{m} {t}");
+        }
         assert_eq!(
             counts["/trajdrift/estimate/odom/aligned"],
             report["estimates"][0]["samples"].as_u64().unwrap() as usize
