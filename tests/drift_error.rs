@@ -251,8 +251,11 @@ proptest! {
         // The first window starts before either curvature signature is defined (eq. 1 needs an ε-chord
         // on both sides), so α = 1 on its first segments: it is left out.
         prop_assert!(paper.windows.len() > 3);
+        // Eq. (1) measures κ over ε-chords, φ/(2r·sin(φ/2)) instead of 1/r: on the tightest circles
+        // (r = 2 m, ε = 0.3 m) the two radii differ from the truth by slightly different amounts, which
+        // leaves up to ~0.25 % after the correction (from ~4 % without).
         for w in &paper.windows[1..] {
-            prop_assert!(w.de < 1e-3, "paper: DE {} at {} s (none: {})", w.de, w.t_start, sn.median);
+            prop_assert!(w.de < 3e-3, "paper: DE {} at {} s (none: {})", w.de, w.t_start, sn.median);
         }
         prop_assert!((sn.median - (d / r).abs()).abs() < 2e-3, "none: {} vs {}", sn.median, d / r);
     }

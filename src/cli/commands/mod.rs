@@ -2,7 +2,7 @@
 
 pub mod batch;
 pub mod eval;
-pub mod merge;
 pub mod export;
+pub mod merge;
 pub mod simulate;
 pub mod topics;
