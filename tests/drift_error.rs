@@ -4,6 +4,8 @@
 //! are seconds relative to the reference's first stamp. Unless a test says otherwise, path_eps = 1.0 m (the
 //! default: the fixtures' reference has 2 cm of noise, which inflates shorter chords, see de_table).
 
+mod common;
+
 use std::path::PathBuf;
 
 use nalgebra::{Rotation3, Vector3};
@@ -71,6 +73,9 @@ const MEDIAN_MISSIONS: [&str; 4] = ["lever_arm", "gnss_outages", "legged", "stra
 
 #[test]
 fn median_de_at_5m_recovers_the_scale_error() {
+    if common::shared().is_none() {
+        return;
+    }
     // path_eps = 1.0 m, lever arm a = 0.1 m (the defaults), both corrections.
     for m in MEDIAN_MISSIONS {
         let ms = load(m);
@@ -107,6 +112,9 @@ fn median_de_at_5m_recovers_the_scale_error() {
 
 #[test]
 fn legged_spins_are_excluded() {
+    if common::shared().is_none() {
+        return;
+    }
     let ms = load("legged_spins");
     let r = drift_error(
         &ms.ref_t,
@@ -139,6 +147,9 @@ fn legged_spins_are_excluded() {
 
 #[test]
 fn legged_spins_is_fast() {
+    if common::shared().is_none() {
+        return;
+    }
     let ms = load("legged_spins");
     let t = std::time::Instant::now();
     let r = drift_error_windows(
@@ -265,6 +276,9 @@ proptest! {
 #[test]
 #[ignore]
 fn de_table() {
+    if common::shared().is_none() {
+        return;
+    }
     println!(
         "| mission | correction | a (m) | path_eps (m) | median | RMSE | n | dropped | discarded ref | discarded est | excluded | truth raw median/RMS | truth body median/RMS |"
     );

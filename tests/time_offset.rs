@@ -2,6 +2,8 @@
 //! definition, the curvature method on analytic trajectories, and both methods on the five simulated
 //! missions of ../shared/fixtures against their truth.json.
 
+mod common;
+
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -316,6 +318,9 @@ fn serde_names_are_lowercase() {
 
 #[test]
 fn speed_recovers_the_offset_on_every_mission() {
+    if common::shared().is_none() {
+        return;
+    }
     let params = OffsetParams::default();
     for name in MISSIONS {
         let m = load(name);
@@ -335,6 +340,9 @@ fn speed_recovers_the_offset_on_every_mission() {
 /// noise and lands far from the truth; the status must say so (see the table in `offset_table`).
 #[test]
 fn curvature_is_never_ok_when_far_off_on_the_missions() {
+    if common::shared().is_none() {
+        return;
+    }
     for name in MISSIONS {
         let m = load(name);
         for eps in [0.1, 0.3] {
@@ -365,6 +373,9 @@ fn table_params(eps_m: f64, dt_max_s: f64) -> OffsetParams {
 #[test]
 #[ignore]
 fn offset_table() {
+    if common::shared().is_none() {
+        return;
+    }
     let configs: [(&str, f64, f64); 5] = [
         ("eps 0.1 m, dt_max 2 s", 0.1, 2.0),
         ("eps 0.3 m, dt_max 2 s", 0.3, 2.0),
@@ -412,6 +423,9 @@ fn offset_table() {
 #[test]
 #[ignore]
 fn speed_variants() {
+    if common::shared().is_none() {
+        return;
+    }
     let missions: Vec<(&str, Mission)> = MISSIONS.iter().map(|&n| (n, load(n))).collect();
     println!("| window (s) | mean removed | mission errors (ms): lever_arm, gnss_outages, legged, legged_spins, straight | confidences |");
     println!("|---|---|---|---|");
