@@ -322,31 +322,7 @@ pub fn read_mapped_csv(path: &Path, mapping: &CsvMapping) -> Result<Trajectory> 
 /// identity orientation when it has none), which [`CsvMapping::by_name`] reads back without a mapping.
 pub fn write_csv<W: std::io::Write>(mut out: W, traj: &Trajectory) -> std::io::Result<()> {
     writeln!(out, "t,x,y,z,qx,qy,qz,qw")?;
-    for i in 0..traj.len() {
-        let t = traj.stamps_ns[i];
-        let p = traj.positions[i];
-        let q = traj
-            .orientations
-            .as_ref()
-            .map(|o| o[i])
-            .unwrap_or_else(UnitQuaternion::identity);
-        let sign = if t < 0 { "-" } else { "" };
-        let a = t.unsigned_abs();
-        writeln!(
-            out,
-            "{sign}{}.{:09},{:.9},{:.9},{:.9},{:.9},{:.9},{:.9},{:.9}",
-            a / 1_000_000_000,
-            a % 1_000_000_000,
-            p.x,
-            p.y,
-            p.z,
-            q.i,
-            q.j,
-            q.k,
-            q.w
-        )?;
-    }
-    Ok(())
+    crate::sources::tum::write_rows(out, traj, ',')
 }
 
 #[cfg(test)]

@@ -87,7 +87,18 @@ pub(crate) fn parse_stamp_ns(line: &str) -> Option<i64> {
 }
 
 /// Writes `traj` as TUM (nanosecond stamps printed exactly; identity orientation when it has none).
-pub fn write_tum<W: Write>(mut out: W, traj: &Trajectory) -> std::io::Result<()> {
+pub fn write_tum<W: Write>(out: W, traj: &Trajectory) -> std::io::Result<()> {
+    write_rows(out, traj, ' ')
+}
+
+/// Writes one `t x y z qx qy qz qw` row per sample with `sep` between the values: stamps printed exactly
+/// as seconds with nine decimals, identity orientation when the trajectory has none. Shared by the TUM and
+/// CSV writers.
+pub(crate) fn write_rows<W: Write>(
+    mut out: W,
+    traj: &Trajectory,
+    sep: char,
+) -> std::io::Result<()> {
     for i in 0..traj.len() {
         let t = traj.stamps_ns[i];
         let p = traj.positions[i];
@@ -98,19 +109,11 @@ pub fn write_tum<W: Write>(mut out: W, traj: &Trajectory) -> std::io::Result<()>
             .unwrap_or_else(UnitQuaternion::identity);
         let sign = if t < 0 { "-" } else { "" };
         let a = t.unsigned_abs();
-        writeln!(
-            out,
-            "{sign}{}.{:09} {:.9} {:.9} {:.9} {:.9} {:.9} {:.9} {:.9}",
-            a / 1_000_000_000,
-            a % 1_000_000_000,
-            p.x,
-            p.y,
-            p.z,
-            q.i,
-            q.j,
-            q.k,
-            q.w
-        )?;
+        write!(out, "{sign}{}.{:09}", a / 1_000_000_000, a % 1_000_000_000)?;
+        for v in [p.x, p.y, p.z, q.i, q.j, q.k, q.w] {
+            write!(out, "{sep}{v:.9}")?;
+        }
+        writeln!(out)?;
     }
     Ok(())
 }
