@@ -11,11 +11,11 @@ use std::io::{Read, Seek, Write};
 use std::path::Path;
 
 use mcap::records::{op, MessageHeader, Record};
-use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use mcap::sans_io::LinearReadEvent;
 use mcap::{McapError, Writer};
 
 use crate::error::{Error, Result};
-use crate::sources::mcap::stream::read_magic;
+use crate::sources::mcap::stream::open_linear;
 use crate::sources::Progress;
 
 /// What the copy pass tells the annotations about an input channel.
@@ -69,17 +69,7 @@ pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
     annotations: &mut A,
     progress: Progress<'_>,
 ) -> Result<(CopyOutcome, W)> {
-    let mut file = std::fs::File::open(input).map_err(|e| Error::io(input, e))?;
-    let file_size = file.metadata().map_err(|e| Error::io(input, e))?.len();
-    let magic = read_magic(&mut file, input)?;
-    let limit = usize::try_from(file_size.max(256 << 20)).unwrap_or(usize::MAX);
-    let mut reader = LinearReader::new_with_options(
-        LinearReaderOptions::default()
-            .with_validate_chunk_crcs(true)
-            .with_record_length_limit(limit),
-    );
-    reader.insert(magic.len()).copy_from_slice(&magic);
-    reader.notify_read(magic.len());
+    let (mut file, mut reader, magic, file_size) = open_linear(input)?;
 
     let corrupt = |detail: String| Error::CorruptMcap {
         path: input.to_path_buf(),

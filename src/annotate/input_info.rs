@@ -4,10 +4,7 @@
 //! defaults, and the copy pass still detects a clash when it meets one.
 
 use std::collections::BTreeSet;
-use std::io::{Read, Seek};
 use std::path::Path;
-
-use mcap::sans_io::{SummaryReadEvent, SummaryReader, SummaryReaderOptions};
 
 /// Ids and compression of an input recording.
 #[derive(Debug, Clone, Default)]
@@ -44,26 +41,7 @@ pub fn read_input_info(path: &Path) -> InputInfo {
 }
 
 fn read(path: &Path) -> Option<InputInfo> {
-    let mut file = std::fs::File::open(path).ok()?;
-    let size = file.metadata().ok()?.len();
-    let mut reader = SummaryReader::new_with_options(
-        SummaryReaderOptions::default()
-            .with_file_size(size)
-            .with_record_length_limit(64 << 20),
-    );
-    while let Some(event) = reader.next_event() {
-        match event.ok()? {
-            SummaryReadEvent::ReadRequest(n) => {
-                let read = file.read(reader.insert(n)).ok()?;
-                reader.notify_read(read);
-            }
-            SummaryReadEvent::SeekRequest(to) => {
-                let pos = file.seek(to).ok()?;
-                reader.notify_seeked(pos);
-            }
-        }
-    }
-    let summary = reader.finish()?;
+    let summary = crate::sources::mcap::summary::read_mcap_summary(path)?;
     Some(InputInfo {
         schema_ids: summary.schemas.keys().copied().collect(),
         channel_ids: summary.channels.keys().copied().collect(),

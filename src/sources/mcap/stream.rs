@@ -81,20 +81,7 @@ where
     S: FnMut(&ChannelInfo) -> bool,
     F: FnMut(&ChannelInfo, &MessageRef<'_>) -> Result<()>,
 {
-    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let file_size = file.metadata().map_err(|e| Error::io(path, e))?.len();
-    let magic = read_magic(&mut file, path)?;
-    // A record cannot be longer than the file, except a record inside a compressed chunk; the limit
-    // keeps a corrupt length from allocating gigabytes before the read fails.
-    let limit = usize::try_from(file_size.max(256 << 20)).unwrap_or(usize::MAX);
-    let mut reader = LinearReader::new_with_options(
-        LinearReaderOptions::default()
-            .with_validate_chunk_crcs(true)
-            .with_record_length_limit(limit),
-    );
-
-    reader.insert(magic.len()).copy_from_slice(&magic);
-    reader.notify_read(magic.len());
+    let (mut file, mut reader, magic, file_size) = open_linear(path)?;
 
     let mut schemas: HashMap<u16, (String, String)> = HashMap::new();
     // Channel id → (index into outcome.channels, selected).
@@ -201,6 +188,25 @@ where
 }
 
 /// Reads the first 8 bytes and checks they are the MCAP magic: [`Error::NotMcap`] otherwise.
+/// Opens `path` and a [`LinearReader`] over it that has already consumed the magic: the one way every
+/// streaming pass (extraction, topics, the annotated copy) starts. Chunk CRCs are checked; a record cannot
+/// be longer than the file, except one inside a compressed chunk, so the length limit keeps a corrupt
+/// length from allocating gigabytes before the read fails. Returns the file, the reader, the magic and the file's size.
+pub(crate) fn open_linear(path: &Path) -> Result<(std::fs::File, LinearReader, [u8; 8], u64)> {
+    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file_size = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    let magic = read_magic(&mut file, path)?;
+    let limit = usize::try_from(file_size.max(256 << 20)).unwrap_or(usize::MAX);
+    let mut reader = LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_validate_chunk_crcs(true)
+            .with_record_length_limit(limit),
+    );
+    reader.insert(magic.len()).copy_from_slice(&magic);
+    reader.notify_read(magic.len());
+    Ok((file, reader, magic, file_size))
+}
+
 pub(crate) fn read_magic(file: &mut std::fs::File, path: &Path) -> Result<[u8; 8]> {
     let mut magic = [0u8; 8];
     let mut got = 0;

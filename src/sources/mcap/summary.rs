@@ -21,9 +21,10 @@ pub struct SummaryInfo {
     pub message_counts: Option<HashMap<u16, u64>>,
 }
 
-/// Reads the summary of `path`. `None` when the file has no summary, no channel in it, or no valid
-/// footer (a truncated file): the caller reads the data section instead.
-pub fn read_summary(path: &Path) -> Option<SummaryInfo> {
+/// The raw summary section of `path` (schemas, channels, statistics, chunk indexes), read with the
+/// sans-io summary reader: `None` when there is none or it cannot be read. Shared by the source and the
+/// annotated-copy writer.
+pub fn read_mcap_summary(path: &Path) -> Option<mcap::Summary> {
     let mut file = std::fs::File::open(path).ok()?;
     let size = file.metadata().ok()?.len();
     let mut reader = SummaryReader::new_with_options(
@@ -44,7 +45,13 @@ pub fn read_summary(path: &Path) -> Option<SummaryInfo> {
             }
         }
     }
-    let summary = reader.finish()?;
+    reader.finish()
+}
+
+/// Reads the summary of `path`. `None` when the file has no summary, no channel in it, or no valid
+/// footer (a truncated file): the caller reads the data section instead.
+pub fn read_summary(path: &Path) -> Option<SummaryInfo> {
+    let summary = read_mcap_summary(path)?;
     if summary.channels.is_empty() {
         return None;
     }
