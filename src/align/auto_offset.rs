@@ -259,6 +259,7 @@ mod tests {
             margin: 0.5,
             rival_offset_s: None,
             defined_fraction: 1.0,
+            sigma_s: None,
         }
     }
 

@@ -94,7 +94,7 @@ pub fn moving_speed(
     positions: &[Vector3<f64>],
     max_gap_s: f64,
 ) -> Option<(f64, f64)> {
-    let mut v: Vec<f64> = speed_profile(times, positions, 2.0, max_gap_s)
+    let mut v: Vec<f64> = speed_profile(times, positions, 2.0, max_gap_s, 0.0)
         .into_iter()
         .map(|s| s.speed)
         .filter(|v| v.is_finite() && *v > MOVING_SPEED_MPS)

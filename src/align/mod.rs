@@ -5,6 +5,7 @@ pub mod auto_params;
 pub mod clock_drift;
 pub mod curvature;
 pub mod grid;
+pub mod offset_sigma;
 pub mod speed;
 pub mod time_offset;
 pub mod xcorr;

@@ -23,7 +23,8 @@ pub struct SpeedSample {
     pub speed: f64,
 }
 
-/// The windowed speed profile (see the module doc). `times` (seconds) must be non-decreasing and as
+/// The windowed speed profile (see the module doc), debiased for white position noise of σ `noise_m`
+/// per coordinate (0: no correction). `times` (seconds) must be non-decreasing and as
 /// long as `positions`; non-finite samples are skipped. Samples are in increasing time, one per
 /// distinct chord.
 pub fn speed_profile(
@@ -31,7 +32,9 @@ pub fn speed_profile(
     positions: &[Vector3<f64>],
     window_s: f64,
     max_gap_s: f64,
+    noise_m: f64,
 ) -> Vec<SpeedSample> {
+    let bias = 6.0 * noise_m * noise_m;
     let idx: Vec<usize> = (0..times.len().min(positions.len()))
         .filter(|&i| times[i].is_finite() && positions[i].iter().all(|v| v.is_finite()))
         .collect();
@@ -74,7 +77,7 @@ pub fn speed_profile(
         last = Some((j, k));
         out.push(SpeedSample {
             t: 0.5 * (t(j) + t(k)),
-            speed: (p(k) - p(j)).norm() / span,
+            speed: ((p(k) - p(j)).norm_squared() - bias).max(0.0).sqrt() / span,
         });
     }
     out
@@ -92,7 +95,7 @@ mod tests {
             .filter(|&t| !(15.0..20.0).contains(&t))
             .collect();
         let p: Vec<Vector3<f64>> = t.iter().map(|&t| Vector3::new(1.5 * t, 0.0, 0.0)).collect();
-        let v = speed_profile(&t, &p, 1.0, 2.0);
+        let v = speed_profile(&t, &p, 1.0, 2.0, 0.0);
         assert!(v.len() > 300);
         assert!(v.iter().all(|s| (s.speed - 1.5).abs() < 1e-9));
         assert!(v.windows(2).all(|w| w[0].t < w[1].t));

@@ -31,8 +31,10 @@
 
 use nalgebra::Vector3;
 
+use crate::align::auto_params::reference_noise;
 use crate::align::curvature::{curvature_signature, CurvatureParams};
 use crate::align::grid::{grid_span, resample, resample_on_grid, RegularSignal};
+use crate::align::offset_sigma::offset_sigma;
 use crate::align::speed::speed_profile;
 use crate::align::xcorr::{masked_ncc, Centering, OverlapSums};
 use crate::error::{Error, Result};
@@ -135,6 +137,9 @@ pub struct OffsetEstimate {
     pub rival_offset_s: Option<f64>,
     /// Share of the two trajectories' time overlap (at the peak) where both signals are defined.
     pub defined_fraction: f64,
+    /// Standard error of `offset_s`, seconds, from the residual of the aligned signals (see
+    /// [`crate::align::offset_sigma`]); `None` on an overlap too short to tell.
+    pub sigma_s: Option<f64>,
 }
 
 /// Lags whose overlap is below this share of the best overlap are not eligible for the peak: an NCC
@@ -192,10 +197,13 @@ pub fn estimate_time_offset(
                     .map(|s| (s.t, s.signed_curvature()))
                     .unzip()
             }
-            OffsetMethod::Speed => speed_profile(t, p, params.speed_window_s, gap)
-                .into_iter()
-                .map(|s| (s.t, s.speed))
-                .unzip(),
+            OffsetMethod::Speed => {
+                let noise = reference_noise(t, p).unwrap_or(0.0);
+                speed_profile(t, p, params.speed_window_s, gap, noise)
+            }
+            .into_iter()
+            .map(|s| (s.t, s.speed))
+            .unzip(),
         };
         if s.0.len() < 3 {
             return Err(Error::TooFewSamples {
@@ -301,6 +309,7 @@ pub fn estimate_time_offset(
         * (overlap_fraction / OVERLAP_FULL).clamp(0.0, 1.0)
         * (defined_fraction / DEFINED_FULL).clamp(0.0, 1.0))
     .clamp(0.0, 1.0);
+    let sigma_s = offset_sigma((&rt, &rv), (&et, &ev), offset, h, gap, centering);
     let status = if confidence >= MIN_CONFIDENCE && peak >= MIN_CORRELATION && !at_edge {
         OffsetStatus::Ok
     } else {
@@ -316,6 +325,7 @@ pub fn estimate_time_offset(
         margin: lobe.margin,
         rival_offset_s: lobe.rival.map(|i| (coarse.lag(i) - shift) as f64 * h),
         defined_fraction,
+        sigma_s,
     })
 }
 

@@ -225,6 +225,10 @@ fn evaluate_estimate(
             last_third_s: None,
             drift_ppm: None,
             drift_resolution_ppm: None,
+            drift_measured_ppm: None,
+            drift_sigma_ppm: None,
+            first_third_sigma_s: None,
+            last_third_sigma_s: None,
         },
         None => {
             let params = config.offset_params();
@@ -265,12 +269,12 @@ fn evaluate_estimate(
                 Some(Ok(o)) if o.status == OffsetStatus::Ok => {
                     let drift =
                         clock_drift(o.method, &ref_t, ref_p, &est_t, est_p, &params, o.offset_s);
-                    if let Some(d) = drift.filter(|d| d.drift_ppm.abs() > 2.0 * d.resolution_ppm) {
+                    if let Some(d) = drift.filter(|d| d.significant) {
                         warnings.push(Warning {
                             code: "clock_drift_suspected".into(),
                             message: format!(
-                                "{}: Δt is {:+.3} s on the first third and {:+.3} s on the last ({:+.0} ppm, resolution {:.0} ppm): a single offset does not fit the whole mission; crop with --t-start/--t-end",
-                                est.name, d.first_third_s, d.last_third_s, d.drift_ppm, d.resolution_ppm
+                                "{}: Δt is {:+.3} s on the first third and {:+.3} s on the last ({:+.0} ± {:.0} ppm): a single offset does not fit the whole mission; crop with --t-start/--t-end",
+                                est.name, d.first_third_s, d.last_third_s, d.measured_ppm, d.sigma_ppm
                             ),
                         });
                     }
@@ -288,6 +292,10 @@ fn evaluate_estimate(
                         last_third_s: drift.map(|d| d.last_third_s),
                         drift_ppm: drift.map(|d| d.drift_ppm),
                         drift_resolution_ppm: drift.map(|d| d.resolution_ppm),
+                        drift_measured_ppm: drift.map(|d| d.measured_ppm),
+                        drift_sigma_ppm: drift.map(|d| d.sigma_ppm),
+                        first_third_sigma_s: drift.map(|d| d.first_sigma_s),
+                        last_third_sigma_s: drift.map(|d| d.last_sigma_s),
                     }
                 }
                 Some(Err(e @ Error::NoOverlap { .. })) => {
@@ -329,6 +337,10 @@ fn evaluate_estimate(
                         last_third_s: None,
                         drift_ppm: None,
                         drift_resolution_ppm: None,
+                        drift_measured_ppm: None,
+                        drift_sigma_ppm: None,
+                        first_third_sigma_s: None,
+                        last_third_sigma_s: None,
                     }
                 }
             }

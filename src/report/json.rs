@@ -160,16 +160,28 @@ pub struct TimeOffsetReport {
     /// v·(Δt_signed-curvature − Δt_speed) when both were confident and disagreed, metres.
     #[serde(default)]
     pub implied_lever_arm_m: Option<f64>,
-    /// Δt on the first and the last third of the overlap, seconds, and the clock drift they imply,
-    /// ppm (positive: the estimate's clock runs fast, Δt shrinks with time).
+    /// Δt on the first and the last third of the overlap, seconds, with their standard errors (see
+    /// [`crate::align::clock_drift`]).
     #[serde(default)]
     pub first_third_s: Option<f64>,
     #[serde(default)]
     pub last_third_s: Option<f64>,
     #[serde(default)]
+    pub first_third_sigma_s: Option<f64>,
+    #[serde(default)]
+    pub last_third_sigma_s: Option<f64>,
+    /// The clock drift the thirds imply, ppm (positive: the estimate's clock runs fast, Δt shrinks
+    /// with time), and its standard error.
+    #[serde(default)]
+    pub drift_measured_ppm: Option<f64>,
+    #[serde(default)]
+    pub drift_sigma_ppm: Option<f64>,
+    /// The drift concluded: `drift_measured_ppm` when it exceeds 3 `drift_sigma_ppm`, else 0 (a
+    /// constant offset fits).
+    #[serde(default)]
     pub drift_ppm: Option<f64>,
-    /// The smallest drift the mission resolves, ppm (thirds scatter by tens of ms: hundreds of ppm
-    /// on a few minutes, ~10 ppm on two hours).
+    /// The smallest drift the mission resolves, 3 `drift_sigma_ppm` (hundreds of ppm on a few
+    /// minutes, a few ppm on hours).
     #[serde(default)]
     pub drift_resolution_ppm: Option<f64>,
 }
