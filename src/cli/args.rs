@@ -187,8 +187,8 @@ pub struct EvalArgs {
     #[arg(long)]
     pub force: bool,
     /// Reference sensor position relative to the common body point, body frame, metres; or
-    /// tf-static:[BODY:]FRAME: FRAME's offset in BODY from /tf_static (BODY defaults to CHILD of a
-    /// /tf:PARENT:CHILD reference).
+    /// tf-static:[BODY:]FRAME: FRAME's offset in BODY from /tf_static (BODY defaults to CHILD of the
+    /// /tf:PARENT:CHILD inputs).
     #[arg(
         long,
         value_name = "X,Y,Z|tf-static:[BODY:]FRAME",
@@ -197,8 +197,8 @@ pub struct EvalArgs {
     pub reference_lever: Option<String>,
     /// Estimate sensor position relative to the common body point, body frame, metres; the estimate
     /// is moved onto the reference's point (p − R·(l_est − l_ref)) before alignment (repeatable, NAME= for one estimate).
-    /// tf-static:[BODY:]FRAME takes FRAME's offset in BODY from /tf_static (BODY defaults to CHILD of a
-    /// /tf:PARENT:CHILD estimate).
+    /// tf-static:[BODY:]FRAME takes FRAME's offset in BODY from /tf_static (BODY defaults to CHILD of
+    /// the /tf:PARENT:CHILD inputs).
     #[arg(
         long,
         value_name = "[NAME=]X,Y,Z|tf-static:[BODY:]FRAME",

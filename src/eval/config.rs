@@ -104,9 +104,11 @@ impl NamedInput {
 pub enum LeverSpec {
     /// `X,Y,Z`: the sensor's position in the body frame, metres.
     Offset([f64; 3]),
-    /// `tf-static:[BODY:]FRAME`: the translation of FRAME in BODY, composed from the recording's
-    /// `/tf_static` edges. BODY defaults to the trajectory's own body frame, which only a TF chain
-    /// `/tf:PARENT:CHILD` names (it is CHILD); for any other input BODY must be written.
+    /// `tf-static:[BODY:]FRAME`: the translation of FRAME in BODY (FRAME's origin in the body frame),
+    /// composed from the recording's `/tf_static` edges. BODY defaults to the evaluation's body frame:
+    /// CHILD of its `/tf:PARENT:CHILD` inputs when they name one and agree; otherwise it must be
+    /// written. E.g. estimate `/tf:odom:base_link` with `--reference-lever tf-static:gnss_link`: the
+    /// GNSS antenna's offset in base_link.
     TfStatic { body: Option<String>, frame: String },
 }
 

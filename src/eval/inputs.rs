@@ -165,8 +165,23 @@ fn lever_flag(config: &EvalConfig, input: &NamedInput) -> &'static str {
     }
 }
 
-/// The (BODY, FRAME) look-up a `tf-static:` lever of `input` needs: BODY as written, else CHILD of a
-/// `/tf:PARENT:CHILD` input; an error when neither names it or there is no recording.
+/// The body frame of the evaluation, for `tf-static:FRAME` levers written without BODY: the CHILD
+/// frame of the `/tf:PARENT:CHILD` inputs when there are some and they all name the same one (levers
+/// are positions relative to one common body point, in one body frame). `None` otherwise.
+fn common_body_frame(config: &EvalConfig) -> Option<String> {
+    let mut children = std::iter::once(&config.reference)
+        .chain(&config.estimates)
+        .filter_map(|i| match &i.input {
+            TrajectoryInput::Topic(t) => parse_chain_topic(t).and_then(|r| r.ok()).map(|r| r.child),
+            TrajectoryInput::TumFile(_) => None,
+        });
+    let first = children.next()?;
+    children.all(|c| c == first).then_some(first)
+}
+
+/// The (BODY, FRAME) look-up a `tf-static:` lever of `input` needs: BODY as written, else the
+/// evaluation's body frame ([`common_body_frame`]); an error when neither names it or there is no
+/// recording.
 fn static_lookup(
     config: &EvalConfig,
     input: &NamedInput,
@@ -182,15 +197,9 @@ fn static_lookup(
             spec.map(LeverSpec::describe).unwrap_or_default()
         )));
     }
-    let chain_child = match &input.input {
-        TrajectoryInput::Topic(t) => parse_chain_topic(t).and_then(|r| r.ok()).map(|r| r.child),
-        TrajectoryInput::TumFile(_) => None,
-    };
-    let Some(body) = body.clone().or(chain_child) else {
+    let Some(body) = body.clone().or_else(|| common_body_frame(config)) else {
         return Err(Error::InvalidArgument(format!(
-            "{flag} tf-static:{frame} for `{}` ({}): its body frame is unknown (only a /tf:PARENT:CHILD input names it); write tf-static:BODY:{frame}, e.g. tf-static:base_link:{frame}",
-            input.name,
-            input.label()
+            "{flag} tf-static:{frame}: the body frame is unknown (only /tf:PARENT:CHILD inputs name it, as CHILD, and they must agree); write tf-static:BODY:{frame}, e.g. tf-static:base_link:{frame}"
         )));
     };
     Ok(Some((body, frame.clone())))

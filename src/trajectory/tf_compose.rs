@@ -14,7 +14,7 @@
 //! - A chain of static edges only has no trajectory: [`compose`] returns `None` and the caller says so
 //!   (a single sample would be no trajectory either).
 
-use nalgebra::{Isometry3, Translation3};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
 use crate::trajectory::Trajectory;
 
@@ -67,9 +67,13 @@ pub fn interpolate(
     let translation = a.translation.vector + (b.translation.vector - a.translation.vector) * f;
     // `try_slerp` takes the shorter arc; it only gives up for quaternions 180° apart on the 4-sphere,
     // which the shorter-arc flip rules out, so the fallback (the nearer sample) is for safety only.
+    // The result is renormalized: for nearby rotations nalgebra's sin(fθ)/sin θ weights share a
+    // rounding error of sin θ (from √(1−cos²θ)) that leaves the quaternion off unit length by up to
+    // ~1e-12, which would scale every position the rotation touches.
     let rotation = a
         .rotation
         .try_slerp(&b.rotation, f, f64::EPSILON)
+        .map(|q| UnitQuaternion::new_normalize(q.into_inner()))
         .unwrap_or(if f < 0.5 { a.rotation } else { b.rotation });
     Some(Isometry3::from_parts(
         Translation3::from(translation),
@@ -125,7 +129,7 @@ pub fn compose(links: &[Link<'_>]) -> Option<Composed> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::{UnitQuaternion, Vector3};
+    use nalgebra::Vector3;
     use std::f64::consts::FRAC_PI_2;
 
     fn iso(x: f64, y: f64, z: f64, yaw: f64) -> Isometry3<f64> {
