@@ -463,6 +463,24 @@ mod tests {
     }
 
     #[test]
+    fn a_pair_that_joins_late_starts_at_its_last_edge() {
+        // map→odom is read before odom→base_link links odom to the chain: only its latest edge (stamp
+        // 4) was kept then, so base_link stamps before 4 are outside its span and dropped.
+        let r = request("/tf:map:base_link");
+        let mut c = TfCollector::new(std::slice::from_ref(&r));
+        for i in 0..5 {
+            c.push(false, vec![edge("map", "odom", i, 0.0)], None);
+        }
+        for i in 0..10 {
+            c.push(false, vec![edge("odom", "base_link", i, 1.0)], None);
+        }
+        c.push(false, vec![edge("map", "odom", 100, 0.0)], None);
+        let t = c.finish().chain(Path::new("x.mcap"), &r).unwrap();
+        assert_eq!(t.composed.trajectory.stamps_ns, (4..10).collect::<Vec<_>>());
+        assert_eq!(t.composed.outside_span, 4);
+    }
+
+    #[test]
     fn a_gap_names_both_sides() {
         let r = request("/tf:map:base_link");
         let mut c = TfCollector::new(std::slice::from_ref(&r));
