@@ -440,6 +440,41 @@ fn tf_static_lever_equals_the_numbers() {
     c.estimates = vec![NamedInput::topic("est=/reference/position")];
     let e = evaluate(&c, &|_| {}).unwrap_err().to_string();
     assert!(e.contains("write tf-static:BODY:gnss"), "{e}");
+
+    // The same from the command line; a malformed spec is a usage error (exit 2).
+    let eval = |lever: &str| {
+        bin()
+            .arg("eval")
+            .arg(&rec)
+            .args([
+                "--reference",
+                "/reference/position",
+                "--estimate",
+                "/tf:odom:base_link",
+                "--time-offset",
+                "0.2",
+                "--json",
+                "-",
+                "--reference-lever",
+                lever,
+            ])
+            .output()
+            .unwrap()
+    };
+    let o = eval("tf-static:base_link:gnss");
+    assert!(
+        matches!(o.status.code(), Some(0) | Some(3)),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        serde_json::to_value(x.reference_lever_m).unwrap(),
+        v["estimates"][0]["extrinsics"]["reference_lever_m"]
+    );
+    let o = eval("tf-static:");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("tf-static: takes a frame, or BODY:FRAME"));
 }
 
 /// An aligned TF-chain estimate has no message of its own to patch: the annotated copy writes it as
