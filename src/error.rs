@@ -100,6 +100,15 @@ pub enum Error {
     /// A rosbag2 folder cannot be read (metadata.yaml, its files, or the sqlite3 database).
     #[error("{path}: rosbag2 folder: {detail}")]
     Rosbag2 { path: PathBuf, detail: String },
+    /// A TF chain (`/tf:PARENT:CHILD`) or a `tf-static:` lever cannot be built from the recording's
+    /// `/tf` and `/tf_static` edges.
+    #[error("{path}: {topic}: {detail}; run `trajdrift topics {path}` to list the TF frame pairs")]
+    TfChain {
+        path: PathBuf,
+        topic: String,
+        detail: String,
+    },
+
     /// A text trajectory file (KITTI, EuRoC, CSV) could not be parsed; `hint` says what was expected.
     #[error("{path}:{line}: {detail}; {hint}")]
     Text {

@@ -38,8 +38,8 @@ fn true_levers_put_curvature_within_25_ms() {
             "/reference/position",
             "/estimate/odom",
         );
-        c.estimate_levers = vec![(None, lever(&truth, "estimate"))];
-        c.reference_lever_m = Some(lever(&truth, "reference"));
+        c.estimate_levers = vec![(None, lever(&truth, "estimate").into())];
+        c.reference_lever = Some(lever(&truth, "reference").into());
         let report = evaluate(&c, &|_| {}).unwrap();
         let est = &report.estimates[0];
         let curvature = est
@@ -69,7 +69,7 @@ fn moving_a_position_only_trajectory_is_refused() {
         "/estimate/odom",
         "/reference/position",
     );
-    c.estimate_levers = vec![(None, [0.2, 0.0, 0.3])];
+    c.estimate_levers = vec![(None, [0.2, 0.0, 0.3].into())];
     let e = evaluate(&c, &|_| {}).unwrap_err().to_string();
     assert_eq!(e.lines().count(), 1, "{e}");
     assert!(

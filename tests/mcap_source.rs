@@ -196,6 +196,7 @@ fn log_stamps_and_default_origin() {
         &ExtractOptions {
             stamp: StampSource::Log,
             origin: None,
+            ..Default::default()
         },
     );
     // gnss_outages records receipt time as log time: it differs from the header stamps.

@@ -194,7 +194,12 @@ fn plan(config: &EvalConfig, report: &Report, inputs: &Inputs) -> Plan {
                 curvature: curvature_messages(&aligned, config),
                 drift_error,
                 aligned: match topic {
-                    Some(t) if message_kind(&est.type_name).is_some() => {
+                    // A TF chain (`/tf:PARENT:CHILD`) has no message of its own to patch: it is
+                    // written as PoseStamped from its samples, like a TUM file.
+                    Some(t)
+                        if message_kind(&est.type_name).is_some()
+                            && crate::sources::tf_chain::parse_chain_topic(&t).is_none() =>
+                    {
                         AlignedSource::PatchTopic(t)
                     }
                     _ => AlignedSource::Generate(aligned),

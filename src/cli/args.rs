@@ -186,12 +186,24 @@ pub struct EvalArgs {
     /// Replace an existing --annotate output.
     #[arg(long)]
     pub force: bool,
-    /// Reference sensor position relative to the common body point, body frame, metres.
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    /// Reference sensor position relative to the common body point, body frame, metres; or
+    /// tf-static:[BODY:]FRAME: FRAME's offset in BODY from /tf_static (BODY defaults to CHILD of the
+    /// /tf:PARENT:CHILD inputs).
+    #[arg(
+        long,
+        value_name = "X,Y,Z|tf-static:[BODY:]FRAME",
+        allow_hyphen_values = true
+    )]
     pub reference_lever: Option<String>,
     /// Estimate sensor position relative to the common body point, body frame, metres; the estimate
     /// is moved onto the reference's point (p − R·(l_est − l_ref)) before alignment (repeatable, NAME= for one estimate).
-    #[arg(long, value_name = "[NAME=]X,Y,Z", allow_hyphen_values = true)]
+    /// tf-static:[BODY:]FRAME takes FRAME's offset in BODY from /tf_static (BODY defaults to CHILD of
+    /// the /tf:PARENT:CHILD inputs).
+    #[arg(
+        long,
+        value_name = "[NAME=]X,Y,Z|tf-static:[BODY:]FRAME",
+        allow_hyphen_values = true
+    )]
     pub estimate_lever: Vec<String>,
     #[command(flatten)]
     pub text: TextArgs,

@@ -99,6 +99,72 @@ impl NamedInput {
     }
 }
 
+/// A lever arm as given (see [`crate::trajectory::extrinsics`] for the convention).
+#[derive(Debug, Clone, PartialEq)]
+pub enum LeverSpec {
+    /// `X,Y,Z`: the sensor's position in the body frame, metres.
+    Offset([f64; 3]),
+    /// `tf-static:[BODY:]FRAME`: the translation of FRAME in BODY (FRAME's origin in the body frame),
+    /// composed from the recording's `/tf_static` edges. BODY defaults to the evaluation's body frame:
+    /// CHILD of its `/tf:PARENT:CHILD` inputs when they name one and agree; otherwise it must be
+    /// written. E.g. estimate `/tf:odom:base_link` with `--reference-lever tf-static:gnss_link`: the
+    /// GNSS antenna's offset in base_link.
+    TfStatic { body: Option<String>, frame: String },
+}
+
+impl From<[f64; 3]> for LeverSpec {
+    fn from(l: [f64; 3]) -> Self {
+        LeverSpec::Offset(l)
+    }
+}
+
+impl LeverSpec {
+    /// Parses `X,Y,Z` or `tf-static:[BODY:]FRAME`; errors name `flag`.
+    pub fn parse(flag: &str, s: &str) -> Result<LeverSpec> {
+        if let Some(rest) = s.strip_prefix("tf-static:") {
+            let parts: Vec<&str> = rest.split(':').collect();
+            return match parts.as_slice() {
+                [f] if !f.is_empty() => Ok(LeverSpec::TfStatic {
+                    body: None,
+                    frame: f.to_string(),
+                }),
+                [b, f] if !b.is_empty() && !f.is_empty() => Ok(LeverSpec::TfStatic {
+                    body: Some(b.to_string()),
+                    frame: f.to_string(),
+                }),
+                _ => Err(Error::InvalidArgument(format!(
+                    "{flag} tf-static: takes a frame, or BODY:FRAME (e.g. tf-static:imu_link or tf-static:base_link:imu_link), got `{s}`"
+                ))),
+            };
+        }
+        let bad = || {
+            Error::InvalidArgument(format!(
+                "{flag} takes three comma-separated numbers X,Y,Z or tf-static:[BODY:]FRAME, got `{s}`"
+            ))
+        };
+        let v: Vec<f64> = s
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| bad())?;
+        <[f64; 3]>::try_from(v)
+            .map(LeverSpec::Offset)
+            .map_err(|_| bad())
+    }
+
+    /// As written on the command line, for messages.
+    pub fn describe(&self) -> String {
+        match self {
+            LeverSpec::Offset(l) => format!("{},{},{}", l[0], l[1], l[2]),
+            LeverSpec::TfStatic { body: None, frame } => format!("tf-static:{frame}"),
+            LeverSpec::TfStatic {
+                body: Some(b),
+                frame,
+            } => format!("tf-static:{b}:{frame}"),
+        }
+    }
+}
+
 fn split_name(spec: &str) -> (Option<String>, &str) {
     match spec.split_once('=') {
         Some((n, rest)) if !n.is_empty() && !n.contains('/') => (Some(n.to_string()), rest),
@@ -146,10 +212,10 @@ pub struct EvalConfig {
     /// per file unless forced.
     pub text: TextOptions,
     /// `--reference-lever`: the reference sensor relative to the common body point (body frame, m).
-    pub reference_lever_m: Option<[f64; 3]>,
-    /// `--estimate-lever [NAME=]X,Y,Z`: estimate sensors relative to the common body point; `None` as
-    /// name applies to every estimate without a named one.
-    pub estimate_levers: Vec<(Option<String>, [f64; 3])>,
+    pub reference_lever: Option<LeverSpec>,
+    /// `--estimate-lever [NAME=]X,Y,Z|tf-static:[BODY:]FRAME`: estimate sensors relative to the common
+    /// body point; `None` as name applies to every estimate without a named one.
+    pub estimate_levers: Vec<(Option<String>, LeverSpec)>,
 }
 
 impl EvalConfig {
@@ -184,7 +250,7 @@ impl EvalConfig {
             curvature_dt_max_s: None,
             export_aligned: None,
             text: TextOptions::default(),
-            reference_lever_m: None,
+            reference_lever: None,
             estimate_levers: Vec::new(),
         }
     }
@@ -283,14 +349,14 @@ impl EvalConfig {
     }
 
     /// The lever of estimate `name`: its own `NAME=` entry, else the unnamed one.
-    pub fn estimate_lever(&self, name: &str) -> Option<[f64; 3]> {
+    pub fn estimate_lever(&self, name: &str) -> Option<&LeverSpec> {
         let named = self
             .estimate_levers
             .iter()
             .find(|(n, _)| n.as_deref() == Some(name));
         named
             .or_else(|| self.estimate_levers.iter().find(|(n, _)| n.is_none()))
-            .map(|(_, l)| *l)
+            .map(|(_, l)| l)
     }
 
     /// Checks every value; the error says which flag is wrong and what it accepts.
@@ -357,7 +423,8 @@ impl EvalConfig {
             }
         }
         let levers = self.estimate_levers.iter().map(|(_, l)| l);
-        for l in levers.chain(self.reference_lever_m.as_ref()) {
+        for l in levers.chain(self.reference_lever.as_ref()) {
+            let LeverSpec::Offset(l) = l else { continue };
             if !l.iter().all(|v| v.is_finite()) {
                 return bad(format!(
                     "a lever arm must be three finite numbers, got {l:?}"

@@ -6,23 +6,23 @@
 use nalgebra::Vector3;
 
 use crate::error::{Error, Result};
-use crate::eval::config::EvalConfig;
 use crate::eval::inputs::Loaded;
 use crate::report::json::ExtrinsicsReport;
 use crate::trajectory::extrinsics::move_to_body_point;
 
 /// Moves each estimate that has a lever (its own, or a reference lever) onto the reference's point.
-/// Returns what was done, per estimate in order (`None` when no lever applies). A position-only
-/// estimate that would have to move is refused with an error naming it.
+/// The levers are those [`crate::eval::inputs::load`] resolved into [`Loaded::lever_m`] (`tf-static:`
+/// ones read from the recording). Returns what was done, per estimate in order (`None` when no lever
+/// applies). A position-only estimate that would have to move is refused with an error naming it.
 pub fn apply_levers(
-    config: &EvalConfig,
+    reference: &Loaded,
     estimates: &mut [Loaded],
 ) -> Result<Vec<Option<ExtrinsicsReport>>> {
-    let l_ref = config.reference_lever_m;
+    let l_ref = reference.lever_m;
     estimates
         .iter_mut()
         .map(|est| {
-            let l_est = config.estimate_lever(&est.name);
+            let l_est = est.lever_m;
             if l_est.is_none() && l_ref.is_none() {
                 return Ok(None);
             }

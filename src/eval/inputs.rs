@@ -4,8 +4,9 @@
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::eval::config::{EvalConfig, NamedInput, TrajectoryInput};
+use crate::eval::config::{EvalConfig, LeverSpec, NamedInput, TrajectoryInput};
 use crate::sources::text::{read_text, TextOptions};
+use crate::sources::tf_chain::parse_chain_topic;
 use crate::sources::{ExtractOptions, Progress, Warning};
 use crate::trajectory::Trajectory;
 
@@ -19,6 +20,8 @@ pub struct Loaded {
     pub trajectory: Trajectory,
     pub dropped_samples: u64,
     pub geodetic_origin: Option<[f64; 3]>,
+    /// Its lever arm (`--reference-lever` / `--estimate-lever`), `tf-static:` ones resolved.
+    pub lever_m: Option<[f64; 3]>,
 }
 
 /// Everything an evaluation reads.
@@ -44,6 +47,23 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
             TrajectoryInput::TumFile(_) => None,
         })
         .collect();
+    // Each input's lever as given, and the /tf_static look-ups the `tf-static:` ones need.
+    let specs: Vec<Option<&LeverSpec>> = all
+        .iter()
+        .enumerate()
+        .map(|(i, input)| match i {
+            0 => config.reference_lever.as_ref(),
+            _ => config.estimate_lever(&input.name),
+        })
+        .collect();
+    let mut lookups: Vec<(String, String)> = Vec::new();
+    for (input, spec) in all.iter().zip(&specs) {
+        if let Some(l) = static_lookup(config, input, *spec)? {
+            if !lookups.contains(&l) {
+                lookups.push(l);
+            }
+        }
+    }
     let mut extraction = None;
     let (path, bytes) = match &config.recording {
         Some(rec) => {
@@ -54,8 +74,15 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
                 let options = ExtractOptions {
                     stamp: config.stamp,
                     origin: config.origin,
+                    static_lookups: lookups.clone(),
                 };
                 extraction = Some(source.extract(&unique, &options, progress)?);
+            } else if !lookups.is_empty() {
+                let options = ExtractOptions {
+                    static_lookups: lookups.clone(),
+                    ..ExtractOptions::default()
+                };
+                extraction = Some(source.extract(&[], &options, progress)?);
             }
             (rec.display().to_string(), source.size_bytes())
         }
@@ -73,7 +100,7 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
         }
     };
     let mut loaded = Vec::with_capacity(all.len());
-    for input in all {
+    for &input in &all {
         loaded.push(match &input.input {
             TrajectoryInput::TumFile(p) => load_tum(&input.name, p, &config.text)?,
             TrajectoryInput::Topic(t) => {
@@ -90,9 +117,35 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
                     trajectory: ex.trajectory.clone(),
                     dropped_samples: ex.invalid_dropped + ex.duplicate_stamps,
                     geodetic_origin: ex.geodetic_origin,
+                    lever_m: None,
                 }
             }
         });
+    }
+    for ((l, input), spec) in loaded.iter_mut().zip(&all).zip(&specs) {
+        l.lever_m = match spec {
+            None => None,
+            Some(LeverSpec::Offset(v)) => Some(*v),
+            Some(spec) => {
+                let (from, to) = static_lookup(config, input, Some(spec))?.unwrap_or_default();
+                let found = extraction
+                    .as_ref()
+                    .and_then(|e| {
+                        e.static_transforms
+                            .iter()
+                            .find(|s| s.from == from && s.to == to)
+                    })
+                    .map(|s| s.pose.clone())
+                    .unwrap_or_else(|| Err("no look-up was made".into()));
+                let pose = found.map_err(|detail| Error::TfChain {
+                    path: config.recording.clone().unwrap_or_default(),
+                    topic: format!("{} {}", lever_flag(config, input), spec.describe()),
+                    detail,
+                })?;
+                let t = pose.translation.vector;
+                Some([t.x, t.y, t.z])
+            }
+        };
     }
     let reference = loaded.remove(0);
     Ok(Inputs {
@@ -104,6 +157,54 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
     })
 }
 
+fn lever_flag(config: &EvalConfig, input: &NamedInput) -> &'static str {
+    if std::ptr::eq(input, &config.reference) {
+        "--reference-lever"
+    } else {
+        "--estimate-lever"
+    }
+}
+
+/// The body frame of the evaluation, for `tf-static:FRAME` levers written without BODY: the CHILD
+/// frame of the `/tf:PARENT:CHILD` inputs when there are some and they all name the same one (levers
+/// are positions relative to one common body point, in one body frame). `None` otherwise.
+fn common_body_frame(config: &EvalConfig) -> Option<String> {
+    let mut children = std::iter::once(&config.reference)
+        .chain(&config.estimates)
+        .filter_map(|i| match &i.input {
+            TrajectoryInput::Topic(t) => parse_chain_topic(t).and_then(|r| r.ok()).map(|r| r.child),
+            TrajectoryInput::TumFile(_) => None,
+        });
+    let first = children.next()?;
+    children.all(|c| c == first).then_some(first)
+}
+
+/// The (BODY, FRAME) look-up a `tf-static:` lever of `input` needs: BODY as written, else the
+/// evaluation's body frame ([`common_body_frame`]); an error when neither names it or there is no
+/// recording.
+fn static_lookup(
+    config: &EvalConfig,
+    input: &NamedInput,
+    spec: Option<&LeverSpec>,
+) -> Result<Option<(String, String)>> {
+    let Some(LeverSpec::TfStatic { body, frame }) = spec else {
+        return Ok(None);
+    };
+    let flag = lever_flag(config, input);
+    if config.recording.is_none() {
+        return Err(Error::InvalidArgument(format!(
+            "{flag} {}: a tf-static: lever is read from the recording's /tf_static; pass the RECORDING",
+            spec.map(LeverSpec::describe).unwrap_or_default()
+        )));
+    }
+    let Some(body) = body.clone().or_else(|| common_body_frame(config)) else {
+        return Err(Error::InvalidArgument(format!(
+            "{flag} tf-static:{frame}: the body frame is unknown (only /tf:PARENT:CHILD inputs name it, as CHILD, and they must agree); write tf-static:BODY:{frame}, e.g. tf-static:base_link:{frame}"
+        )));
+    };
+    Ok(Some((body, frame.clone())))
+}
+
 fn load_tum(name: &str, path: &Path, text: &TextOptions) -> Result<Loaded> {
     let (trajectory, format) = read_text(path, text)?;
     Ok(Loaded {
@@ -113,5 +214,6 @@ fn load_tum(name: &str, path: &Path, text: &TextOptions) -> Result<Loaded> {
         trajectory,
         dropped_samples: 0,
         geodetic_origin: None,
+        lever_m: None,
     })
 }

@@ -39,7 +39,7 @@ pub fn evaluate_with_inputs(
 ) -> Result<(Report, Inputs)> {
     config.validate()?;
     let mut inputs = load(config, progress)?;
-    let levers = extrinsics::apply_levers(config, &mut inputs.estimates)?;
+    let levers = extrinsics::apply_levers(&inputs.reference, &mut inputs.estimates)?;
     let reference = &mut inputs.reference;
     let t0_ns = reference.trajectory.stamps_ns.first().copied().unwrap_or(0);
     let crop = |v: Option<f64>| {

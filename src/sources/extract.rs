@@ -13,8 +13,10 @@ use nalgebra::Vector3;
 use crate::decode::{self, geodesy, Encoding, MessageKind, SamplePosition};
 use crate::error::{Error, Result};
 use crate::sources::mcap::{ChannelInfo, MessageRef, StreamOutcome};
+use crate::sources::tf_chain::{self, ChainRequest, TfCollector};
 use crate::sources::{
-    ExtractOptions, ExtractedTopic, Extraction, Progress, StampSource, TopicInfo, Warning,
+    ExtractOptions, ExtractedTopic, Extraction, Progress, StampSource, StaticTransform, TopicInfo,
+    Warning,
 };
 use crate::trajectory::Trajectory;
 
@@ -74,6 +76,8 @@ pub fn topic_infos(channels: Vec<ChannelInfo>, counts: &HashMap<u16, u64>) -> Ve
             topic: c.topic,
             type_name: c.schema_name,
             message_encoding: c.message_encoding,
+            frame_pairs: Vec::new(),
+            tf_chains: Vec::new(),
         })
         .collect()
 }
@@ -122,6 +126,27 @@ pub fn check_requested(path: &Path, topics: &[String], channels: &[ChannelInfo])
     Ok(())
 }
 
+/// Checks that a recording asked for TF chains has a `/tf` or `/tf_static` channel.
+fn check_tf_channels(path: &Path, chains: &[ChainRequest], channels: &[ChannelInfo]) -> Result<()> {
+    let Some(first) = chains.first() else {
+        return Ok(());
+    };
+    if channels.iter().any(tf_chain::is_tf_channel) {
+        return Ok(());
+    }
+    let mut available: Vec<String> = channels.iter().map(|c| c.topic.clone()).collect();
+    available.sort();
+    available.dedup();
+    Err(Error::TfChain {
+        path: path.to_path_buf(),
+        topic: first.topic.clone(),
+        detail: format!(
+            "a TF chain needs a /tf or /tf_static channel of type tf2_msgs/msg/TFMessage, and there is none (topics present: {})",
+            available.join(", ")
+        ),
+    })
+}
+
 /// A requested topic while the pass runs.
 struct Accumulator {
     kind: MessageKind,
@@ -143,24 +168,55 @@ impl Accumulator {
 }
 
 /// Reads the trajectories of `topics` from `rec` in one pass (see [`crate::sources::Source::extract`]).
+/// Topics named `/tf:PARENT:CHILD` are TF chains ([`tf_chain`]): their edges are collected in the
+/// same pass.
 pub fn extract(
     rec: &dyn Recording,
     topics: &[String],
     options: &ExtractOptions,
     progress: Progress<'_>,
 ) -> Result<Extraction> {
-    if topics.is_empty() {
+    if topics.is_empty() && options.static_lookups.is_empty() {
         return Ok(Extraction::default());
     }
     let path = rec.path();
+    let mut chains: Vec<ChainRequest> = Vec::new();
+    let mut plain: Vec<String> = Vec::new();
+    for t in topics {
+        match tf_chain::parse_chain_topic(t) {
+            Some(r) => {
+                let r = r?;
+                if !chains.contains(&r) {
+                    chains.push(r);
+                }
+            }
+            None => plain.push(t.clone()),
+        }
+    }
+    let topics_plain = &plain;
     // Fail fast on a wrong topic when an index lists the channels.
     if let Some(channels) = rec.known_channels() {
-        check_requested(path, topics, &channels)?;
+        check_requested(path, topics_plain, &channels)?;
+        check_tf_channels(path, &chains, &channels)?;
     }
+    // `tf-static:` levers look up static transforms in the same pass.
+    let mut lookup_frames: Vec<ChainRequest> = options
+        .static_lookups
+        .iter()
+        .map(|(from, to)| ChainRequest {
+            topic: String::new(),
+            parent: tf_chain::frame_name(from).to_string(),
+            child: tf_chain::frame_name(to).to_string(),
+        })
+        .collect();
+    lookup_frames.extend(chains.iter().cloned());
+    let want_tf = !lookup_frames.is_empty();
+    let mut tf = want_tf.then(|| TfCollector::new(&lookup_frames));
+    let mut tf_index: HashMap<u16, u64> = HashMap::new();
 
     // Each distinct requested topic once; `unique[i]` gets accumulator `i`.
     let mut unique: Vec<&str> = Vec::new();
-    for t in topics {
+    for t in topics_plain {
         if !unique.contains(&t.as_str()) {
             unique.push(t.as_str());
         }
@@ -171,9 +227,23 @@ pub fn extract(
     let mut route: HashMap<u16, Option<(usize, Encoding)>> = HashMap::new();
 
     let outcome = rec.pass(
-        &mut |c| unique.contains(&c.topic.as_str()) && channel_kind(c).is_some(),
+        &mut |c| {
+            (unique.contains(&c.topic.as_str()) && channel_kind(c).is_some())
+                || (want_tf && tf_chain::is_tf_channel(c))
+        },
         progress,
         &mut |c, m| {
+            if let Some(tf) = tf.as_mut().filter(|_| tf_chain::is_tf_channel(c)) {
+                let i = tf_index.entry(c.id).or_default();
+                let edges = tf_chain::decode_edges(path, c, *i, m.data)?;
+                *i += 1;
+                let stamp = match options.stamp {
+                    StampSource::Header => None,
+                    StampSource::Log => Some(i64::try_from(m.log_time).unwrap_or(i64::MAX)),
+                };
+                tf.push(tf_chain::is_static_channel(c), edges, stamp);
+                return Ok(());
+            }
             let slot = *route.entry(c.id).or_insert_with(|| {
                 let i = unique.iter().position(|t| *t == c.topic)?;
                 let (kind, encoding) = channel_kind(c)?;
@@ -217,7 +287,31 @@ pub fn extract(
             Ok(())
         },
     )?;
-    check_requested(path, topics, &outcome.channels)?;
+    check_requested(path, topics_plain, &outcome.channels)?;
+    check_tf_channels(path, &chains, &outcome.channels)?;
+    let tree = tf.map(TfCollector::finish).unwrap_or_default();
+    let mut chain_topics = Vec::with_capacity(chains.len());
+    let static_transforms = options
+        .static_lookups
+        .iter()
+        .map(|(from, to)| StaticTransform {
+            from: from.clone(),
+            to: to.clone(),
+            pose: tree.static_transform(from, to),
+        })
+        .collect();
+    for r in &chains {
+        let c = tree.chain(path, r)?;
+        chain_topics.push(ExtractedTopic {
+            topic: r.topic.clone(),
+            type_name: tf_chain::CHAIN_TYPE_NAME.to_string(),
+            trajectory: c.composed.trajectory,
+            messages: c.edges_read,
+            invalid_dropped: c.composed.outside_span,
+            duplicate_stamps: 0,
+            geodetic_origin: None,
+        });
+    }
 
     let mut warnings = Vec::new();
     if let Some(offset) = outcome.truncated_at {
@@ -284,6 +378,10 @@ pub fn extract(
     // In request order; a topic requested twice is cloned.
     let mut topics_out = Vec::with_capacity(topics.len());
     for t in topics {
+        if let Some(c) = chain_topics.iter().find(|c| &c.topic == t) {
+            topics_out.push(c.clone());
+            continue;
+        }
         let i = unique.iter().position(|u| u == t).unwrap_or(0);
         let first = done[i].take();
         let next = match first {
@@ -298,5 +396,6 @@ pub fn extract(
     Ok(Extraction {
         topics: topics_out,
         warnings,
+        static_transforms,
     })
 }

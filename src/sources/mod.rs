@@ -16,6 +16,8 @@ pub mod euroc;
 pub mod kitti;
 pub mod mapped_csv;
 pub mod text;
+pub mod tf_chain;
+pub mod tf_frames;
 
 use crate::error::Result;
 use crate::trajectory::Trajectory;
@@ -38,6 +40,18 @@ pub struct ExtractOptions {
     /// Local ENU origin for `NavSatFix` topics: (latitude °, longitude °, ellipsoidal height m).
     /// `None`: the first valid fix of the first geodetic topic requested.
     pub origin: Option<[f64; 3]>,
+    /// (FROM, TO) frame pairs whose constant `/tf_static` transform (TO's pose in FROM) is wanted, for
+    /// `tf-static:` levers; answered in [`Extraction::static_transforms`] by the same pass.
+    pub static_lookups: Vec<(String, String)>,
+}
+
+/// The answer to one [`ExtractOptions::static_lookups`] entry.
+#[derive(Debug, Clone)]
+pub struct StaticTransform {
+    pub from: String,
+    pub to: String,
+    /// TO's pose in FROM, or why there is none (a gap, a moving edge, an unknown frame).
+    pub pose: std::result::Result<nalgebra::Isometry3<f64>, String>,
 }
 
 /// One channel of a recording, as `trajdrift topics` lists it.
@@ -50,6 +64,13 @@ pub struct TopicInfo {
     pub message_count: u64,
     /// True when trajdrift can read this channel as a trajectory.
     pub readable: bool,
+    /// On a `/tf` or `/tf_static` row when asked for ([`tf_frames::attach`]): the frame pairs it
+    /// carries.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub frame_pairs: Vec<tf_frames::FramePair>,
+    /// On the `/tf` row: the root → leaf chains a user can pass as `/tf:PARENT:CHILD`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub tf_chains: Vec<String>,
 }
 
 /// The trajectory of one topic, with what was learned while reading it.
@@ -82,6 +103,8 @@ pub struct Extraction {
     /// One entry per requested topic, in request order.
     pub topics: Vec<ExtractedTopic>,
     pub warnings: Vec<Warning>,
+    /// One entry per [`ExtractOptions::static_lookups`] entry, in order.
+    pub static_transforms: Vec<StaticTransform>,
 }
 
 /// Reports progress in bytes read so far.
@@ -100,4 +123,10 @@ pub trait Source {
         options: &ExtractOptions,
         progress: Progress<'_>,
     ) -> Result<Extraction>;
+    /// The TF frame pairs the source's `/tf` and `/tf_static` channels carry (one pass over those
+    /// channels only); none for sources without TF (text files).
+    fn frame_pairs(&self, progress: Progress<'_>) -> Result<Vec<tf_frames::FramePair>> {
+        let _ = progress;
+        Ok(Vec::new())
+    }
 }

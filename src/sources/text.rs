@@ -162,6 +162,8 @@ impl Source for TextSource {
             message_encoding: "text".into(),
             message_count: traj.len() as u64,
             readable: true,
+            frame_pairs: Vec::new(),
+            tf_chains: Vec::new(),
         }])
     }
 
@@ -188,6 +190,7 @@ impl Source for TextSource {
                 })
                 .collect(),
             warnings: Vec::new(),
+            static_transforms: Vec::new(),
         })
     }
 }

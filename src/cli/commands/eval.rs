@@ -4,7 +4,7 @@ use anyhow::{anyhow, Result};
 
 use trajdrift::align::time_offset::OffsetMethod;
 use trajdrift::annotate::annotate;
-use trajdrift::eval::config::{EvalConfig, NamedInput, Platform};
+use trajdrift::eval::config::{EvalConfig, LeverSpec, NamedInput, Platform};
 use trajdrift::eval::evaluate_with_inputs;
 use trajdrift::metrics::lever::LeverCorrection;
 use trajdrift::report::{output::write_output, table};
@@ -75,25 +75,23 @@ pub fn config_from_args(a: &EvalArgs) -> Result<EvalConfig> {
     c.t_end = a.t_end;
     c.export_aligned = a.export_aligned.clone();
     c.text = text_options(&a.text)?;
-    c.reference_lever_m = a
+    c.reference_lever = a
         .reference_lever
         .as_deref()
-        .map(|s| parse_triple("--reference-lever", s))
-        .transpose()
-        .map_err(|e| anyhow!(trajdrift::Error::InvalidArgument(e)))?;
+        .map(|s| LeverSpec::parse("--reference-lever", s))
+        .transpose()?;
     c.estimate_levers = a
         .estimate_lever
         .iter()
         .map(|s| {
+            // A name never holds `:` or `,`; `tf-static:` specs may hold `=` only after a `:`.
             let (name, l) = match s.split_once('=') {
-                Some((n, l)) => (Some(n.to_string()), l),
-                None => (None, s.as_str()),
+                Some((n, l)) if !n.contains(':') && !n.contains(',') => (Some(n.to_string()), l),
+                _ => (None, s.as_str()),
             };
-            parse_triple("--estimate-lever", l)
-                .map(|l| (name, l))
-                .map_err(|e| anyhow!(trajdrift::Error::InvalidArgument(e)))
+            LeverSpec::parse("--estimate-lever", l).map(|l| (name, l))
         })
-        .collect::<Result<_>>()?;
+        .collect::<trajdrift::Result<_>>()?;
     Ok(c)
 }
 

@@ -39,6 +39,7 @@ pub fn run(a: ExportArgs) -> Result<u8> {
             StampArg::Log => StampSource::Log,
         },
         origin: None,
+        ..ExtractOptions::default()
     };
     let extraction = source.extract(std::slice::from_ref(&topic), &options, &|_| {})?;
     let traj = &extraction

@@ -10,7 +10,10 @@ use crate::cli::EXIT_OK;
 /// Runs the command; returns the exit code.
 pub fn run(a: TopicsArgs) -> Result<u8> {
     let source = trajdrift::sources::open(&a.recording)?;
-    let topics = source.topics()?;
+    let mut topics = source.topics()?;
+    // TF frames are not in any index: one more pass, over the TF channels only.
+    let pairs = source.frame_pairs(&|_| {})?;
+    trajdrift::sources::tf_frames::attach(&mut topics, &pairs);
     if let Some(path) = &a.json {
         let mut bytes = serde_json::to_vec_pretty(&topics)?;
         bytes.push(b'\n');
@@ -37,6 +40,42 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
             t.message_count,
             if t.readable { "yes" } else { "no" }
         );
+    }
+    if !pairs.is_empty() {
+        let width = pairs
+            .iter()
+            .map(|p| p.parent.len() + p.child.len() + 3)
+            .max()
+            .unwrap_or(0)
+            .max(12);
+        println!();
+        println!(
+            "TF frame pairs (pass /tf:PARENT:CHILD as a topic; chains compose several edges):"
+        );
+        println!(
+            "{:<width$}  {:<8} {:>9}  topic to pass",
+            "parent → child", "kind", "edges"
+        );
+        for p in &pairs {
+            println!(
+                "{:<width$}  {:<8} {:>9}  {}",
+                format!("{} → {}", p.parent, p.child),
+                if p.is_static { "static" } else { "dynamic" },
+                p.count,
+                p.chain
+            );
+        }
+        let chains: Vec<&String> = topics.iter().flat_map(|t| &t.tf_chains).collect();
+        if !chains.is_empty() {
+            println!(
+                "TF chains root → leaf: {}",
+                chains
+                    .iter()
+                    .map(|s| s.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
     }
     Ok(EXIT_OK)
 }

@@ -106,4 +106,11 @@ impl Source for McapSource {
     ) -> Result<Extraction> {
         extract::extract(self, topics, options, progress)
     }
+
+    fn frame_pairs(
+        &self,
+        progress: Progress<'_>,
+    ) -> Result<Vec<crate::sources::tf_frames::FramePair>> {
+        crate::sources::tf_frames::frame_pairs(self, progress)
+    }
 }
