@@ -24,13 +24,18 @@ fn config(rec: std::path::PathBuf, reference: &str, estimate: &str) -> EvalConfi
     c
 }
 
-// TODO(signed-curvature): once the `signed-curvature` method is merged, assert it here too.
 #[test]
-fn true_levers_put_curvature_within_25_ms() {
+fn true_levers_put_both_curvature_methods_within_25_ms() {
     let Some(shared) = common::shared() else {
         return;
     };
-    for m in ["gnss_outages", "legged"] {
+    // With ε 2 m / Δt_max 10 s, and with the automatic parameters (the default).
+    for (m, automatic) in [
+        ("gnss_outages", false),
+        ("legged", false),
+        ("gnss_outages", true),
+        ("legged", true),
+    ] {
         let truth = common::truth(&shared, m);
         let dt_true = truth["time_offset"]["dt_true_s"].as_f64().unwrap();
         let mut c = config(
@@ -38,6 +43,13 @@ fn true_levers_put_curvature_within_25_ms() {
             "/reference/position",
             "/estimate/odom",
         );
+        if automatic {
+            c = EvalConfig::new(
+                c.recording.clone(),
+                c.reference.clone(),
+                c.estimates.clone(),
+            );
+        }
         c.estimate_levers = vec![(None, lever(&truth, "estimate").into())];
         c.reference_lever = Some(lever(&truth, "reference").into());
         let report = evaluate(&c, &|_| {}).unwrap();
@@ -49,10 +61,21 @@ fn true_levers_put_curvature_within_25_ms() {
             .find(|x| x.method == "curvature")
             .and_then(|x| x.offset_s)
             .unwrap();
-        eprintln!("{m}: curvature {curvature:+.4} s, true {dt_true:+.4} s");
+        let signed = est
+            .time_offset
+            .methods
+            .iter()
+            .find(|x| x.method == "signed-curvature")
+            .and_then(|x| x.offset_s)
+            .unwrap();
+        eprintln!("{m}: curvature {curvature:+.4} s, signed {signed:+.4} s, true {dt_true:+.4} s");
         assert!(
             (curvature - dt_true).abs() < 0.025,
             "{m}: {curvature} vs {dt_true}"
+        );
+        assert!(
+            (signed - dt_true).abs() < 0.025,
+            "{m}: signed {signed} vs {dt_true}"
         );
         let x = est.extrinsics.as_ref().expect("extrinsics in the report");
         assert_eq!(x.estimate_lever_m, lever(&truth, "estimate"));
