@@ -267,7 +267,8 @@ fn topics_lists_channels() {
     );
     let o = run(&["topics", s(&rec), "--json", "-"]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let odom = v
+    assert_eq!(v["presets"], serde_json::json!([]));
+    let odom = v["topics"]
         .as_array()
         .unwrap()
         .iter()

@@ -98,7 +98,7 @@ pub struct EvalArgs {
     /// The recording (.mcap). Optional when both sides are text files.
     pub recording: Option<PathBuf>,
     /// Reference topic.
-    #[arg(long, value_name = "TOPIC", required_unless_present = "reference_file")]
+    #[arg(long, value_name = "TOPIC", required_unless_present_any = ["reference_file", "preset"])]
     pub reference: Option<String>,
     /// Reference from a text file (TUM, KITTI, EuRoC, CSV) instead of a topic.
     #[arg(long, value_name = "FILE", conflicts_with = "reference")]
@@ -193,8 +193,16 @@ pub struct EvalArgs {
     /// is moved onto the reference's point (p − R·(l_est − l_ref)) before alignment (repeatable, NAME= for one estimate).
     #[arg(long, value_name = "[NAME=]X,Y,Z", allow_hyphen_values = true)]
     pub estimate_lever: Vec<String>,
+    /// The usual topics of a dataset: a built-in preset (grandtour, grandtour-prism, fomo) or a preset
+    /// file (.toml, see presets/). --reference/--estimate given replace the preset's.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub preset: Option<String>,
     #[command(flatten)]
     pub text: TextArgs,
+    /// Flags set on the command line (clap ids), filled by [`crate::cli::parse`]: they win over a
+    /// preset's parameters.
+    #[arg(skip)]
+    pub given: Vec<String>,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]

@@ -11,8 +11,10 @@ use crate::cli::EXIT_OK;
 pub fn run(a: TopicsArgs) -> Result<u8> {
     let source = trajdrift::sources::open(&a.recording)?;
     let topics = source.topics()?;
+    let presets = trajdrift::eval::preset::matching(&topics);
     if let Some(path) = &a.json {
-        let mut bytes = serde_json::to_vec_pretty(&topics)?;
+        let listing = serde_json::json!({ "topics": topics, "presets": presets });
+        let mut bytes = serde_json::to_vec_pretty(&listing)?;
         bytes.push(b'\n');
         write_output(path, &bytes)?;
         if path.as_os_str() == "-" {
@@ -38,5 +40,14 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
             if t.readable { "yes" } else { "no" }
         );
     }
+    println!("presets matching: {}", presets_line(&presets));
     Ok(EXIT_OK)
+}
+
+fn presets_line(presets: &[String]) -> String {
+    if presets.is_empty() {
+        "none".into()
+    } else {
+        format!("{} (use --preset NAME)", presets.join(", "))
+    }
 }
