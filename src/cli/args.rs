@@ -36,7 +36,7 @@ pub enum ExportFormatArg {
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
-    /// The recording (.mcap), or a text trajectory file.
+    /// The recording (MCAP, ROS 1 bag, rosbag2 folder), or a text trajectory file.
     pub recording: PathBuf,
     /// The topic to write (not needed for a text file).
     #[arg(long, value_name = "TOPIC")]
