@@ -45,6 +45,16 @@ pub enum Error {
         supported: Vec<String>,
     },
 
+    /// A preset's topics for a role are absent from the recording.
+    #[error("{path}: preset {preset}: no {what} topic ({topics} not present); {hint}")]
+    PresetTopicMissing {
+        path: PathBuf,
+        preset: String,
+        what: String,
+        topics: String,
+        hint: String,
+    },
+
     /// A message could not be decoded.
     #[error("{path}: topic {topic}: cannot decode message {index}: {detail}; check that the channel's schema matches its messages")]
     Decode {

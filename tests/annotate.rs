@@ -215,7 +215,7 @@ fn annotated_fixtures_keep_every_record_and_add_the_results() {
             .unwrap();
         let topics: serde_json::Value = serde_json::from_slice(&topics.stdout).unwrap();
         for (t, n) in &counts {
-            let listed = topics
+            let listed = topics["topics"]
                 .as_array()
                 .unwrap()
                 .iter()

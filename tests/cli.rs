@@ -267,7 +267,8 @@ fn topics_lists_channels() {
     );
     let o = run(&["topics", s(&rec), "--json", "-"]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let odom = v
+    assert_eq!(v["presets"], serde_json::json!([]));
+    let odom = v["topics"]
         .as_array()
         .unwrap()
         .iter()
@@ -327,4 +328,103 @@ fn weak_offset_exits_3_and_still_writes_json() {
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(report["estimates"][0]["time_offset"]["status"], "weak");
     assert_eq!(report["estimates"][0]["time_offset"]["applied_s"], 0.0);
+}
+
+/// Runs `args`, and checks the failure a user sees: a non-zero exit without a panic, and one line on
+/// stderr naming `file` and containing `what`.
+fn one_line_failure(args: &[&str], file: &str, what: &str) {
+    let o = run(args);
+    let e = stderr(&o);
+    assert!(
+        matches!(o.status.code(), Some(1 | 2)),
+        "{args:?}: {:?} {e}",
+        o.status
+    );
+    assert!(!e.contains("panicked"), "{e}");
+    assert_eq!(e.trim_end().lines().count(), 1, "{args:?}: {e}");
+    assert!(
+        e.contains(file) && e.contains(what),
+        "{args:?}: {file}, {what}: {e}"
+    );
+}
+
+#[test]
+fn bad_recordings_and_mappings_are_one_line_errors() {
+    use trajdrift::decode::ros1;
+    use trajdrift::decode::ros2_msgs::{Header, Odometry, Time};
+    use trajdrift::sources::bag::writer::{BagCompression, BagWriter};
+    let dir = tempfile::tempdir().unwrap();
+
+    // A ROS 1 bag whose chunks use a compression trajdrift does not read.
+    let bag = dir.path().join("zstd.bag");
+    let f = std::io::BufWriter::new(std::fs::File::create(&bag).unwrap());
+    let mut w = BagWriter::new(f, BagCompression::Other("zstd".into()), 4096).unwrap();
+    let c = w.add_connection("/estimate/odom", "nav_msgs/Odometry");
+    for i in 0..50u32 {
+        let ns = 1_700_000_000_000_000_000 + i as i64 * 10_000_000;
+        let o = Odometry {
+            header: Header {
+                stamp: Time::from_ns(ns),
+                frame_id: "odom".into(),
+            },
+            ..Default::default()
+        };
+        w.write(c, ns as u64, &ros1::encode_odometry(i, &o))
+            .unwrap();
+    }
+    w.finish().unwrap();
+    let eval = |rec: &str| {
+        vec![
+            "eval".to_string(),
+            rec.to_string(),
+            "--reference".into(),
+            "/estimate/odom".into(),
+            "--estimate".into(),
+            "/estimate/odom".into(),
+        ]
+    };
+    let args = eval(s(&bag));
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    one_line_failure(&args, "zstd.bag", "compression `zstd`");
+    one_line_failure(
+        &["export", s(&bag), "--topic", "/estimate/odom", "-"],
+        "zstd.bag",
+        "compression `zstd`",
+    );
+
+    // A rosbag2 folder whose metadata names a file that is not there.
+    let folder = dir.path().join("run_rosbag2");
+    std::fs::create_dir(&folder).unwrap();
+    std::fs::write(
+        folder.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n  storage_identifier: mcap\n  relative_file_paths: [run_0.mcap]\n",
+    )
+    .unwrap();
+    let args = eval(s(&folder));
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    one_line_failure(&args, "run_rosbag2", "run_0.mcap, which is missing");
+    one_line_failure(&["topics", s(&folder)], "run_rosbag2", "which is missing");
+
+    // A CSV mapping naming a column the file does not have.
+    let csv = dir.path().join("odom.csv");
+    std::fs::write(&csv, "stamp,px,py,pz\n1,0,0,0\n2,1,0,0\n3,2,0,0\n").unwrap();
+    let mapping = "t=stamp:us,x=px,y=py,z=height";
+    one_line_failure(
+        &[
+            "eval",
+            "--reference-file",
+            s(&csv),
+            "--estimate-file",
+            s(&csv),
+            "--csv",
+            mapping,
+        ],
+        "odom.csv",
+        "`height`",
+    );
+    one_line_failure(
+        &["export", s(&csv), "--csv", mapping, "-"],
+        "odom.csv",
+        "`height`",
+    );
 }

@@ -11,18 +11,6 @@ use serde_json::Value;
 use trajdrift::sources::mcap::{for_each_message, McapSource};
 use trajdrift::sources::Source;
 
-fn shared() -> PathBuf {
-    let p = std::env::var("TRAJDRIFT_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|_| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"));
-    assert!(
-        p.join("conformance/data").is_dir(),
-        "conformance data not found under {} (set TRAJDRIFT_SHARED)",
-        p.display()
-    );
-    p
-}
-
 /// A record's fields as a map (the JSON lists them as `[name, value]` pairs).
 fn fields(record: &Value) -> BTreeMap<String, Value> {
     record["fields"]
@@ -45,10 +33,10 @@ type Msg = (u16, u32, u64, u64, Vec<u8>);
 
 #[test]
 fn every_variant_reads_every_channel_and_message() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
-    let root = shared().join("conformance/data");
+    };
+    let root = shared.join("conformance/data");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&root)
         .expect("conformance/data")
         .flat_map(|d| std::fs::read_dir(d.expect("entry").path()).expect("variant folder"))

@@ -6,59 +6,10 @@
 
 mod common;
 
-use std::path::PathBuf;
-
 use nalgebra::{Rotation3, Vector3};
 use proptest::prelude::*;
 use trajdrift::metrics::drift_error::{drift_error, drift_error_windows, DriftParams};
 use trajdrift::metrics::lever::LeverCorrection;
-use trajdrift::sources::tum::read_tum;
-
-fn shared() -> PathBuf {
-    std::env::var("TRAJDRIFT_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|_| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"))
-}
-
-struct Mission {
-    truth: serde_json::Value,
-    ref_t: Vec<f64>,
-    ref_p: Vec<Vector3<f64>>,
-    est_t: Vec<f64>,
-    est_p: Vec<Vector3<f64>>,
-    /// Reference's first stamp minus truth start_time, seconds.
-    ref_origin_s: f64,
-}
-
-fn load(name: &str) -> Mission {
-    let dir = shared().join("fixtures").join(name);
-    assert!(
-        dir.is_dir(),
-        "shared fixtures missing at {}: set TRAJDRIFT_SHARED to the shared/ folder",
-        dir.display()
-    );
-    let truth: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("truth.json")).expect("truth.json readable"),
-    )
-    .expect("truth.json is JSON");
-    let dt = truth["time_offset"]["dt_true_s"]
-        .as_f64()
-        .expect("dt_true_s");
-    let start_ns = truth["start_time_ns"].as_i64().expect("start_time_ns");
-    let r = read_tum(&dir.join("reference.tum")).expect("reference.tum");
-    let e = read_tum(&dir.join("estimate.tum")).expect("estimate.tum");
-    let t0 = r.stamps_ns[0];
-    let ref_t = r.times_s(t0);
-    let est_t: Vec<f64> = e.times_s(t0).iter().map(|t| t + dt).collect();
-    Mission {
-        ref_origin_s: (t0 - start_ns) as f64 * 1e-9,
-        truth,
-        ref_t,
-        ref_p: r.positions,
-        est_t,
-        est_p: e.positions,
-    }
-}
 
 fn params(eps: f64, corr: LeverCorrection, lever_arm_m: f64) -> DriftParams {
     DriftParams {
@@ -73,12 +24,12 @@ const MEDIAN_MISSIONS: [&str; 4] = ["lever_arm", "gnss_outages", "legged", "stra
 
 #[test]
 fn median_de_at_5m_recovers_the_scale_error() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
+    };
     // path_eps = 1.0 m, lever arm a = 0.1 m (the defaults), both corrections.
     for m in MEDIAN_MISSIONS {
-        let ms = load(m);
+        let ms = common::load(&shared, m);
         let scale = ms.truth["estimate_model"]["scale_error"]
             .as_f64()
             .expect("scale_error");
@@ -86,7 +37,7 @@ fn median_de_at_5m_recovers_the_scale_error() {
             let r = drift_error(
                 &ms.ref_t,
                 &ms.ref_p,
-                &ms.est_t,
+                &ms.est_t_on_ref_clock,
                 &ms.est_p,
                 &params(1.0, corr, 0.1),
             )
@@ -112,14 +63,14 @@ fn median_de_at_5m_recovers_the_scale_error() {
 
 #[test]
 fn legged_spins_are_excluded() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
-    let ms = load("legged_spins");
+    };
+    let ms = common::load(&shared, "legged_spins");
     let r = drift_error(
         &ms.ref_t,
         &ms.ref_p,
-        &ms.est_t,
+        &ms.est_t_on_ref_clock,
         &ms.est_p,
         &params(1.0, LeverCorrection::Paper, 0.1),
     )
@@ -147,15 +98,15 @@ fn legged_spins_are_excluded() {
 
 #[test]
 fn legged_spins_is_fast() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
-    let ms = load("legged_spins");
+    };
+    let ms = common::load(&shared, "legged_spins");
     let t = std::time::Instant::now();
     let r = drift_error_windows(
         &ms.ref_t,
         &ms.ref_p,
-        &ms.est_t,
+        &ms.est_t_on_ref_clock,
         &ms.est_p,
         &DriftParams::default(),
         &[1.0, 5.0, 10.0, 20.0],
@@ -276,9 +227,9 @@ proptest! {
 #[test]
 #[ignore]
 fn de_table() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
+    };
     println!(
         "| mission | correction | a (m) | path_eps (m) | median | RMSE | n | dropped | discarded ref | discarded est | excluded | truth raw median/RMS | truth body median/RMS |"
     );
@@ -290,7 +241,7 @@ fn de_table() {
         "legged_spins",
         "straight",
     ] {
-        let ms = load(m);
+        let ms = common::load(&shared, m);
         let tw = &ms.truth["drift_error"]["windows"]["5"];
         let truth = |k: &str| {
             format!(
@@ -317,7 +268,7 @@ fn de_table() {
                     let r = drift_error(
                         &ms.ref_t,
                         &ms.ref_p,
-                        &ms.est_t,
+                        &ms.est_t_on_ref_clock,
                         &ms.est_p,
                         &params(eps, corr, a),
                     )

@@ -28,3 +28,35 @@ fn exported_topic_reads_back_as_csv_and_tum() {
         assert_eq!(t.len(), reference.len());
     }
 }
+
+#[test]
+fn every_recording_format_exports_the_same_tum_bytes() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let legged = common::mission(&shared, "legged");
+    let export = |input: &std::path::Path, name: &str| {
+        let out = dir.path().join(name);
+        let o = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+            .args([
+                "export",
+                input.to_str().unwrap(),
+                "--topic",
+                "/estimate/odom",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        std::fs::read(out).unwrap()
+    };
+    let mcap = export(&legged.join("mission.mcap"), "mcap.tum");
+    assert!(!mcap.is_empty());
+    assert_eq!(export(&legged.join("mission_ros1.bag"), "bag.tum"), mcap);
+    assert_eq!(export(&legged.join("rosbag2"), "rosbag2.tum"), mcap);
+}

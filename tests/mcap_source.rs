@@ -4,7 +4,7 @@
 mod common;
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use trajdrift::decode::cdr;
@@ -16,33 +16,6 @@ use trajdrift::sources::mcap::McapSource;
 use trajdrift::sources::tum::read_tum;
 use trajdrift::sources::{ExtractOptions, Extraction, Source, StampSource};
 use trajdrift::{Error, Trajectory};
-
-fn shared() -> PathBuf {
-    let p = std::env::var("TRAJDRIFT_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|_| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"));
-    assert!(
-        p.join("fixtures").is_dir(),
-        "shared evidence not found at {} (set TRAJDRIFT_SHARED)",
-        p.display()
-    );
-    p
-}
-
-fn missions() -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(shared().join("fixtures"))
-        .expect("fixtures folder")
-        .map(|e| e.expect("dir entry").path())
-        .filter(|p| p.join("mission.mcap").is_file())
-        .collect();
-    v.sort();
-    assert!(v.len() >= 5, "expected the five missions, found {v:?}");
-    v
-}
-
-fn truth(mission: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(mission.join("truth.json")).unwrap()).unwrap()
-}
 
 fn origin(truth: &serde_json::Value) -> [f64; 3] {
     let o = &truth["geodetic_origin"];
@@ -86,12 +59,12 @@ const MISSION_TOPICS: [&str; 4] = [
 
 #[test]
 fn missions_match_truth_and_tum() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
-    for mission in missions() {
-        let name = mission.file_name().unwrap().to_string_lossy().to_string();
-        let truth = truth(&mission);
+    };
+    for name in common::MISSIONS {
+        let mission = common::mission(&shared, name);
+        let truth = common::truth(&shared, name);
         let options = ExtractOptions {
             origin: Some(origin(&truth)),
             ..Default::default()
@@ -159,11 +132,12 @@ fn missions_match_truth_and_tum() {
 
 #[test]
 fn topics_lists_every_channel_with_counts() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
-    for mission in missions() {
-        let truth = truth(&mission);
+    };
+    for name in common::MISSIONS {
+        let mission = common::mission(&shared, name);
+        let truth = common::truth(&shared, name);
         let source = McapSource::open(&mission.join("mission.mcap")).unwrap();
         let listed = source.topics().unwrap();
         let expected = truth["topics"].as_object().unwrap();
@@ -185,11 +159,11 @@ fn topics_lists_every_channel_with_counts() {
 
 #[test]
 fn log_stamps_and_default_origin() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
-    let mission = shared().join("fixtures/gnss_outages");
-    let truth = truth(&mission);
+    };
+    let mission = common::mission(&shared, "gnss_outages");
+    let truth = common::truth(&shared, "gnss_outages");
     let ex = extract(
         &mission.join("mission.mcap"),
         &["/reference/fix", "/estimate/pose"],
@@ -219,10 +193,10 @@ fn log_stamps_and_default_origin() {
 
 #[test]
 fn missing_topic_lists_topics_present() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
-    let path = shared().join("fixtures/lever_arm/mission.mcap");
+    };
+    let path = shared.join("fixtures/lever_arm/mission.mcap");
     let err = McapSource::open(&path)
         .unwrap()
         .extract(
@@ -250,10 +224,10 @@ fn missing_topic_lists_topics_present() {
 
 #[test]
 fn unsupported_type_lists_supported_types() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
-    let path = shared().join("fixtures/lever_arm/mission.mcap");
+    };
+    let path = shared.join("fixtures/lever_arm/mission.mcap");
     let err = McapSource::open(&path)
         .unwrap()
         .extract(&topics(&["/imu/data"]), &Default::default(), &|_| {})
@@ -295,10 +269,10 @@ fn not_mcap_and_unreadable() {
 
 #[test]
 fn truncated_recording_warns_and_keeps_what_was_read() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
-    let src = shared().join("fixtures/lever_arm/mission.mcap");
+    };
+    let src = shared.join("fixtures/lever_arm/mission.mcap");
     let bytes = std::fs::read(&src).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let full = extract(&src, &["/estimate/pose"], &ExtractOptions::default());

@@ -288,7 +288,7 @@ fn topics_lists_frame_pairs_and_chains() {
         .output()
         .unwrap();
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let tf_row = v
+    let tf_row = v["topics"]
         .as_array()
         .unwrap()
         .iter()

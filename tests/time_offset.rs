@@ -4,7 +4,6 @@
 
 mod common;
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use nalgebra::{Rotation3, Vector3};
@@ -14,58 +13,8 @@ use trajdrift::align::time_offset::{
     estimate_time_offset, OffsetEstimate, OffsetMethod, OffsetParams, OffsetStatus,
 };
 use trajdrift::align::xcorr::{masked_ncc, masked_ncc_direct, overlap_sums, Centering};
-use trajdrift::sources::tum::read_tum;
 
-const MISSIONS: [&str; 5] = [
-    "lever_arm",
-    "gnss_outages",
-    "legged",
-    "legged_spins",
-    "straight",
-];
-
-fn shared() -> PathBuf {
-    std::env::var("TRAJDRIFT_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|_| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"))
-}
-
-/// A mission's reference and estimate as (times, positions), times in seconds from the reference's
-/// first stamp, and its true offset.
-struct Mission {
-    ref_t: Vec<f64>,
-    ref_p: Vec<Vector3<f64>>,
-    est_t: Vec<f64>,
-    est_p: Vec<Vector3<f64>>,
-    dt_true: f64,
-}
-
-fn load(name: &str) -> Mission {
-    let dir = shared().join("fixtures").join(name);
-    assert!(
-        dir.is_dir(),
-        "{} is missing: set TRAJDRIFT_SHARED to the shared evidence folder",
-        dir.display()
-    );
-    let reference = read_tum(&dir.join("reference.tum")).expect("reference.tum");
-    let estimate = read_tum(&dir.join("estimate.tum")).expect("estimate.tum");
-    let truth: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("truth.json")).expect("truth.json"))
-            .expect("truth.json is JSON");
-    let dt_true = truth["time_offset"]["dt_true_s"]
-        .as_f64()
-        .expect("time_offset.dt_true_s");
-    let t0 = reference.stamps_ns[0];
-    Mission {
-        ref_t: reference.times_s(t0),
-        ref_p: reference.positions.clone(),
-        est_t: estimate.times_s(t0),
-        est_p: estimate.positions.clone(),
-        dt_true,
-    }
-}
-
-fn run(m: &Mission, method: OffsetMethod, params: &OffsetParams) -> OffsetEstimate {
+fn run(m: &common::Mission, method: OffsetMethod, params: &OffsetParams) -> OffsetEstimate {
     estimate_time_offset(method, &m.ref_t, &m.ref_p, &m.est_t, &m.est_p, params)
         .unwrap_or_else(|e| panic!("{}: {e}", method.as_str()))
 }
@@ -318,12 +267,12 @@ fn serde_names_are_lowercase() {
 
 #[test]
 fn speed_recovers_the_offset_on_every_mission() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
+    };
     let params = OffsetParams::default();
-    for name in MISSIONS {
-        let m = load(name);
+    for name in common::MISSIONS {
+        let m = common::load(&shared, name);
         let r = run(&m, OffsetMethod::Speed, &params);
         let err = r.offset_s - m.dt_true;
         assert!(
@@ -340,11 +289,11 @@ fn speed_recovers_the_offset_on_every_mission() {
 /// noise and lands far from the truth; the status must say so (see the table in `offset_table`).
 #[test]
 fn curvature_is_never_ok_when_far_off_on_the_missions() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
-    for name in MISSIONS {
-        let m = load(name);
+    };
+    for name in common::MISSIONS {
+        let m = common::load(&shared, name);
         for eps in [0.1, 0.3] {
             let r = run(&m, OffsetMethod::Curvature, &table_params(eps, 2.0));
             let err = r.offset_s - m.dt_true;
@@ -373,9 +322,9 @@ fn table_params(eps_m: f64, dt_max_s: f64) -> OffsetParams {
 #[test]
 #[ignore]
 fn offset_table() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
+    };
     let configs: [(&str, f64, f64); 5] = [
         ("eps 0.1 m, dt_max 2 s", 0.1, 2.0),
         ("eps 0.3 m, dt_max 2 s", 0.3, 2.0),
@@ -387,7 +336,10 @@ fn offset_table() {
         "| method | ε, Δt_max | mission | Δt est (s) | truth (s) | error (ms) | NCC | confidence | status | time (ms) |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
-    let missions: Vec<(&str, Mission)> = MISSIONS.iter().map(|&n| (n, load(n))).collect();
+    let missions: Vec<(&str, common::Mission)> = common::MISSIONS
+        .iter()
+        .map(|&n| (n, common::load(&shared, n)))
+        .collect();
     let mut rows = vec![(OffsetMethod::Speed, configs[0])];
     rows.extend(configs.iter().map(|&c| (OffsetMethod::Curvature, c)));
     for (method, (label, eps, dt_max)) in rows {
@@ -423,10 +375,13 @@ fn offset_table() {
 #[test]
 #[ignore]
 fn speed_variants() {
-    if common::shared().is_none() {
+    let Some(shared) = common::shared() else {
         return;
-    }
-    let missions: Vec<(&str, Mission)> = MISSIONS.iter().map(|&n| (n, load(n))).collect();
+    };
+    let missions: Vec<(&str, common::Mission)> = common::MISSIONS
+        .iter()
+        .map(|&n| (n, common::load(&shared, n)))
+        .collect();
     println!("| window (s) | mean removed | mission errors (ms): lever_arm, gnss_outages, legged, legged_spins, straight | confidences |");
     println!("|---|---|---|---|");
     for window in [0.3, 0.5, 1.0, 2.0, 4.0] {

@@ -13,7 +13,14 @@
 //! estimates = ["/estimate/odom", "pose=/estimate/pose"]
 //! [mission.parameters]       # optional, over the defaults
 //! time_offset = 0.2
+//!
+//! [[mission]]                # a preset names the topics (see presets/); reference/estimates
+//! recording = "grandtour/2024-11-14.bag"          # given here replace the preset's
+//! preset = "grandtour"       # or in [defaults]: preset = "grandtour"
 //! ```
+//!
+//! With a preset, the recording's topic list is read when the manifest is loaded, so a recording
+//! that lacks the preset's topics fails the batch before any mission runs.
 //!
 //! A folder of recordings is the same with one mission per `.mcap` found (see [`Manifest::from_dir`]).
 
@@ -21,88 +28,10 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::align::time_offset::OffsetMethod;
 use crate::error::{Error, Result};
-use crate::eval::config::{EvalConfig, NamedInput, Platform};
-use crate::metrics::lever::LeverCorrection;
-use crate::sources::StampSource;
-
-/// Parameter overrides, named like the `eval` flags (`-` written `_`).
-#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Overrides {
-    pub platform: Option<String>,
-    pub eps_min: Option<f64>,
-    pub curvature_eps: Option<f64>,
-    pub path_eps: Option<f64>,
-    pub theta_max: Option<f64>,
-    pub dt_max: Option<f64>,
-    pub window: Option<Vec<f64>>,
-    pub overlap: Option<f64>,
-    pub lever_correction: Option<String>,
-    pub lever_arm: Option<f64>,
-    pub offset_method: Option<String>,
-    pub max_offset: Option<f64>,
-    pub grid: Option<f64>,
-    pub time_offset: Option<f64>,
-    pub stamp: Option<String>,
-    pub t_start: Option<f64>,
-    pub t_end: Option<f64>,
-}
-
-impl Overrides {
-    /// Applies the set values to `c`; an unknown word names the field and what it accepts.
-    pub fn apply(&self, c: &mut EvalConfig) -> Result<()> {
-        let bad = |field: &str, v: &str, ok: &str| {
-            Error::InvalidArgument(format!("manifest: {field} = \"{v}\": expected {ok}"))
-        };
-        if let Some(p) = &self.platform {
-            c.platform = match p.as_str() {
-                "legged" => Platform::Legged,
-                "wheeled" => Platform::Wheeled,
-                _ => return Err(bad("platform", p, "legged or wheeled")),
-            };
-        }
-        if let Some(m) = &self.offset_method {
-            c.offset_method = match m.as_str() {
-                "curvature" => OffsetMethod::Curvature,
-                "speed" => OffsetMethod::Speed,
-                _ => return Err(bad("offset_method", m, "curvature or speed")),
-            };
-        }
-        if let Some(s) = &self.stamp {
-            c.stamp = match s.as_str() {
-                "header" => StampSource::Header,
-                "log" => StampSource::Log,
-                _ => return Err(bad("stamp", s, "header or log")),
-            };
-        }
-        if let Some(l) = &self.lever_correction {
-            c.lever_correction = l.parse::<LeverCorrection>()?;
-        }
-        let set = |dst: &mut f64, v: Option<f64>| {
-            if let Some(v) = v {
-                *dst = v;
-            }
-        };
-        set(&mut c.theta_max_rad, self.theta_max);
-        set(&mut c.dt_max_s, self.dt_max);
-        set(&mut c.overlap, self.overlap);
-        set(&mut c.lever_arm_m, self.lever_arm);
-        set(&mut c.max_offset_s, self.max_offset);
-        set(&mut c.grid_s, self.grid);
-        c.eps_min_m = self.eps_min.or(c.eps_min_m);
-        c.curvature_eps_m = self.curvature_eps.or(c.curvature_eps_m);
-        c.path_eps_m = self.path_eps.or(c.path_eps_m);
-        c.time_offset_s = self.time_offset.or(c.time_offset_s);
-        c.t_start = self.t_start.or(c.t_start);
-        c.t_end = self.t_end.or(c.t_end);
-        if let Some(w) = &self.window {
-            c.windows_m = w.clone();
-        }
-        Ok(())
-    }
-}
+use crate::eval::config::{EvalConfig, NamedInput};
+pub use crate::eval::overrides::Overrides;
+use crate::eval::preset::Preset;
 
 /// One mission as written in the manifest.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -111,9 +40,13 @@ pub struct Mission {
     /// Unique name: the output files are `<name>.json` and `<name>.mcap`.
     pub name: Option<String>,
     pub recording: PathBuf,
-    pub reference: String,
-    /// `[NAME=]TOPIC`, like `eval --estimate`.
+    /// Needed unless a preset names it.
+    pub reference: Option<String>,
+    /// `[NAME=]TOPIC`, like `eval --estimate`; empty: the preset's.
+    #[serde(default)]
     pub estimates: Vec<String>,
+    /// A built-in preset, or a preset file relative to the manifest.
+    pub preset: Option<String>,
     #[serde(default)]
     pub parameters: Overrides,
 }
@@ -164,11 +97,36 @@ impl Manifest {
         for m in file.mission {
             let recording = base.join(&m.recording);
             let name = m.name.clone().unwrap_or_else(|| stem(&m.recording));
-            let mut config = EvalConfig::new(
-                Some(recording),
-                NamedInput::topic(&m.reference),
-                m.estimates.iter().map(|e| NamedInput::topic(e)).collect(),
-            );
+            let reference = m.reference.as_deref().map(NamedInput::topic);
+            let estimates: Vec<NamedInput> =
+                m.estimates.iter().map(|e| NamedInput::topic(e)).collect();
+            let preset = m
+                .preset
+                .as_ref()
+                .or(m.parameters.preset.as_ref())
+                .or(file.defaults.preset.as_ref());
+            let in_mission = |e: Error| {
+                Error::InvalidArgument(format!("{}: mission {name}: {e}", path.display()))
+            };
+            let mut config = match preset {
+                Some(spec) => {
+                    let p = Preset::load_from(spec, base).map_err(in_mission)?;
+                    let s = p
+                        .select_in(Some(&recording), reference, estimates)
+                        .map_err(in_mission)?;
+                    let mut c = EvalConfig::new(Some(recording), s.reference, s.estimates);
+                    p.apply_parameters(&mut c, &[]).map_err(in_mission)?;
+                    c
+                }
+                None => {
+                    let reference = reference.ok_or_else(|| {
+                        in_mission(Error::InvalidArgument(
+                            "give reference = \"TOPIC\" or preset = \"NAME\"".into(),
+                        ))
+                    })?;
+                    EvalConfig::new(Some(recording), reference, estimates)
+                }
+            };
             file.defaults.apply(&mut config)?;
             m.parameters.apply(&mut config)?;
             missions.push(MissionSpec { name, config });
@@ -259,6 +217,7 @@ fn collect_mcaps(dir: &Path, depth: usize, out: &mut Vec<PathBuf>) -> Result<()>
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::eval::config::Platform;
 
     #[test]
     fn parses_defaults_and_overrides() {

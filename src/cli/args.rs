@@ -36,7 +36,7 @@ pub enum ExportFormatArg {
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
-    /// The recording (.mcap), or a text trajectory file.
+    /// The recording (MCAP, ROS 1 bag, rosbag2 folder), or a text trajectory file.
     pub recording: PathBuf,
     /// The topic to write (not needed for a text file).
     #[arg(long, value_name = "TOPIC")]
@@ -98,7 +98,7 @@ pub struct EvalArgs {
     /// The recording (.mcap). Optional when both sides are text files.
     pub recording: Option<PathBuf>,
     /// Reference topic.
-    #[arg(long, value_name = "TOPIC", required_unless_present = "reference_file")]
+    #[arg(long, value_name = "TOPIC", required_unless_present_any = ["reference_file", "preset"])]
     pub reference: Option<String>,
     /// Reference from a text file (TUM, KITTI, EuRoC, CSV) instead of a topic.
     #[arg(long, value_name = "FILE", conflicts_with = "reference")]
@@ -205,8 +205,16 @@ pub struct EvalArgs {
         allow_hyphen_values = true
     )]
     pub estimate_lever: Vec<String>,
+    /// The usual topics of a dataset: a built-in preset (grandtour, grandtour-prism, fomo) or a preset
+    /// file (.toml, see presets/). --reference/--estimate given replace the preset's.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub preset: Option<String>,
     #[command(flatten)]
     pub text: TextArgs,
+    /// Flags set on the command line (clap ids), filled by [`crate::cli::parse`]: they win over a
+    /// preset's parameters.
+    #[arg(skip)]
+    pub given: Vec<String>,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]

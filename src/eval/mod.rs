@@ -5,6 +5,8 @@ pub mod config;
 pub mod export;
 pub mod extrinsics;
 pub mod inputs;
+pub mod overrides;
+pub mod preset;
 
 use rayon::prelude::*;
 

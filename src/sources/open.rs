@@ -27,3 +27,23 @@ pub fn open(path: &Path) -> Result<Box<dyn Source + Send + Sync>> {
     }
     Ok(Box::new(McapSource::open(path)?))
 }
+
+/// True when `path` is a recording [`open`] reads (a rosbag2 folder or its metadata.yaml, a file
+/// starting with the ROS 1 bag or MCAP magic, or named `.mcap`/`.bag`), false for anything else
+/// (a text trajectory), so commands that take both can tell them apart.
+pub fn is_recording(path: &Path) -> bool {
+    if path.is_dir() || path.file_name().is_some_and(|n| n == "metadata.yaml") {
+        return true;
+    }
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap") || e.eq_ignore_ascii_case("bag"))
+    {
+        return true;
+    }
+    let mut head = [0u8; 8];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| super::bag::records::read_full(&mut f, &mut head))
+        .unwrap_or(0);
+    head[..n].starts_with(b"#ROSBAG") || head[..n] == *mcap::MAGIC
+}

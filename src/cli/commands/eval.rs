@@ -6,6 +6,7 @@ use trajdrift::align::time_offset::OffsetMethod;
 use trajdrift::annotate::annotate;
 use trajdrift::eval::config::{EvalConfig, LeverSpec, NamedInput, Platform};
 use trajdrift::eval::evaluate_with_inputs;
+use trajdrift::eval::preset::Preset;
 use trajdrift::metrics::lever::LeverCorrection;
 use trajdrift::report::{output::write_output, table};
 use trajdrift::sources::StampSource;
@@ -17,19 +18,38 @@ use crate::cli::args::{
 use crate::cli::progress::ReadProgress;
 use crate::cli::{EXIT_OK, EXIT_WARNING};
 
-/// Builds the library's request from the flags.
-pub fn config_from_args(a: &EvalArgs) -> Result<EvalConfig> {
+/// Builds the library's request from the flags, and the notes to print (a preset's estimates absent
+/// from the recording).
+pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
     let reference = match (&a.reference, &a.reference_file) {
-        (Some(t), _) => NamedInput::topic(t),
-        (None, Some(f)) => NamedInput::file(&f.to_string_lossy()),
-        (None, None) => return Err(anyhow!("give --reference TOPIC or --reference-file FILE")),
+        (Some(t), _) => Some(NamedInput::topic(t)),
+        (None, Some(f)) => Some(NamedInput::file(&f.to_string_lossy())),
+        (None, None) => None,
     };
-    let estimates = a
+    let estimates: Vec<NamedInput> = a
         .estimate
         .iter()
         .map(|s| NamedInput::topic(s))
         .chain(a.estimate_file.iter().map(|s| NamedInput::file(s)))
         .collect();
+    let preset = a.preset.as_deref().map(Preset::load).transpose()?;
+    let mut notes = Vec::new();
+    let (reference, estimates) = match &preset {
+        Some(p) => {
+            let s = p.select_in(a.recording.as_deref(), reference, estimates)?;
+            notes.extend(s.skipped.iter().map(|n| {
+                format!(
+                    "preset {}: estimate {n} is not in the recording, skipped",
+                    p.name
+                )
+            }));
+            (s.reference, s.estimates)
+        }
+        None => (
+            reference.ok_or_else(|| anyhow!("give --reference TOPIC or --reference-file FILE"))?,
+            estimates,
+        ),
+    };
     let mut c = EvalConfig::new(a.recording.clone(), reference, estimates);
     c.stamp = match a.stamp {
         StampArg::Header => StampSource::Header,
@@ -92,12 +112,20 @@ pub fn config_from_args(a: &EvalArgs) -> Result<EvalConfig> {
             LeverSpec::parse("--estimate-lever", l).map(|l| (name, l))
         })
         .collect::<trajdrift::Result<_>>()?;
-    Ok(c)
+    if let Some(p) = &preset {
+        p.apply_parameters(&mut c, &a.given)?;
+    }
+    Ok((c, notes))
 }
 
 /// Runs the command; returns the exit code.
 pub fn run(a: EvalArgs) -> Result<u8> {
-    let config = config_from_args(&a)?;
+    let (config, notes) = config_from_args(&a)?;
+    if !a.quiet {
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+    }
     if let (Some(out), Some(rec)) = (&a.annotate, &config.recording) {
         // Refuse before the evaluation pass rather than after it.
         trajdrift::annotate::check_output(rec, out, a.force)?;

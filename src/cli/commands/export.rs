@@ -5,7 +5,7 @@ use anyhow::{anyhow, Result};
 
 use trajdrift::report::output::write_output;
 use trajdrift::sources::mapped_csv::write_csv;
-use trajdrift::sources::mcap::McapSource;
+use trajdrift::sources::open::is_recording;
 use trajdrift::sources::text::TextSource;
 use trajdrift::sources::tum::write_tum;
 use trajdrift::sources::{ExtractOptions, Source, StampSource};
@@ -15,19 +15,14 @@ use crate::cli::EXIT_OK;
 
 /// Runs the command; returns the exit code.
 pub fn run(a: ExportArgs) -> Result<u8> {
-    let is_mcap = a
-        .recording
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"));
-    // TODO(dispatcher): open ROS 1 bags and rosbag2 folders through the source dispatcher once merged.
-    let (source, topic): (Box<dyn Source>, String) = if is_mcap {
+    let (source, topic): (Box<dyn Source>, String) = if is_recording(&a.recording) {
         let topic = a.topic.clone().ok_or_else(|| {
             anyhow!(trajdrift::Error::InvalidArgument(format!(
                 "{}: give --topic TOPIC (see `trajdrift topics`)",
                 a.recording.display()
             )))
         })?;
-        (Box::new(McapSource::open(&a.recording)?), topic)
+        (trajdrift::sources::open(&a.recording)?, topic)
     } else {
         let s = TextSource::open(&a.recording, text_options(&a.text)?)?;
         let topic = s.channel();

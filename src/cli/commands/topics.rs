@@ -14,8 +14,10 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
     // TF frames are not in any index: one more pass, over the TF channels only.
     let pairs = source.frame_pairs(&|_| {})?;
     trajdrift::sources::tf_frames::attach(&mut topics, &pairs);
+    let presets = trajdrift::eval::preset::matching(&topics);
     if let Some(path) = &a.json {
-        let mut bytes = serde_json::to_vec_pretty(&topics)?;
+        let listing = serde_json::json!({ "topics": topics, "presets": presets });
+        let mut bytes = serde_json::to_vec_pretty(&listing)?;
         bytes.push(b'\n');
         write_output(path, &bytes)?;
         if path.as_os_str() == "-" {
@@ -41,6 +43,7 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
             if t.readable { "yes" } else { "no" }
         );
     }
+    println!("presets matching: {}", presets_line(&presets));
     if !pairs.is_empty() {
         let width = pairs
             .iter()
@@ -78,4 +81,12 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
         }
     }
     Ok(EXIT_OK)
+}
+
+fn presets_line(presets: &[String]) -> String {
+    if presets.is_empty() {
+        "none".into()
+    } else {
+        format!("{} (use --preset NAME)", presets.join(", "))
+    }
 }
