@@ -315,7 +315,7 @@ fn topics_lists_frame_pairs_and_chains() {
         ]
     );
     assert_eq!(tf_row["tf_chains"], serde_json::json!(["/tf:map:imu"]));
-    let static_row = v
+    let static_row = v["topics"]
         .as_array()
         .unwrap()
         .iter()

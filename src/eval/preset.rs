@@ -275,6 +275,8 @@ mod tests {
                 message_encoding: "cdr".into(),
                 message_count: 10,
                 readable: true,
+                frame_pairs: Vec::new(),
+                tf_chains: Vec::new(),
             })
             .collect()
     }
