@@ -54,20 +54,15 @@ fn true_levers_put_both_curvature_methods_within_25_ms() {
         c.reference_lever = Some(lever(&truth, "reference").into());
         let report = evaluate(&c, &|_| {}).unwrap();
         let est = &report.estimates[0];
-        let curvature = est
-            .time_offset
-            .methods
-            .iter()
-            .find(|x| x.method == "curvature")
-            .and_then(|x| x.offset_s)
-            .unwrap();
-        let signed = est
-            .time_offset
-            .methods
-            .iter()
-            .find(|x| x.method == "signed-curvature")
-            .and_then(|x| x.offset_s)
-            .unwrap();
+        let offset = |method: &str| {
+            est.time_offset
+                .methods
+                .iter()
+                .find(|x| x.method == method)
+                .and_then(|x| x.offset_s)
+                .unwrap()
+        };
+        let (curvature, signed) = (offset("curvature"), offset("signed-curvature"));
         eprintln!("{m}: curvature {curvature:+.4} s, signed {signed:+.4} s, true {dt_true:+.4} s");
         assert!(
             (curvature - dt_true).abs() < 0.025,

@@ -218,6 +218,19 @@ fn write_recording(
     w.finish().unwrap();
 }
 
+/// `n` `/tf` messages stamped 1000, 1001, … ns, each with an identity edge per (parent, child).
+fn identity_edges(pairs: &[(&str, &str)], n: i64) -> Vec<Vec<TransformStamped>> {
+    let id = Isometry3::identity();
+    (0..n)
+        .map(|i| {
+            pairs
+                .iter()
+                .map(|(p, c)| transform(p, c, 1_000 + i, &id))
+                .collect()
+        })
+        .collect()
+}
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_trajdrift"))
 }
@@ -228,15 +241,7 @@ fn bin() -> Command {
 fn a_gap_in_the_chain_is_a_clear_one_line_error() {
     let dir = tempfile::tempdir().unwrap();
     let rec = dir.path().join("gap.mcap");
-    let id = Isometry3::identity();
-    let tf: Vec<Vec<TransformStamped>> = (0..10)
-        .map(|i| {
-            vec![
-                transform("odom", "base_link", 1_000 + i, &id),
-                transform("map", "gps", 1_000 + i, &id),
-            ]
-        })
-        .collect();
+    let tf = identity_edges(&[("odom", "base_link"), ("map", "gps")], 10);
     write_recording(&rec, &tf, &[], None);
     let o = bin()
         .arg("eval")
@@ -265,14 +270,7 @@ fn topics_lists_frame_pairs_and_chains() {
     let dir = tempfile::tempdir().unwrap();
     let rec = dir.path().join("tree.mcap");
     let id = Isometry3::identity();
-    let tf: Vec<Vec<TransformStamped>> = (0..5)
-        .map(|i| {
-            vec![
-                transform("map", "odom", 1_000 + i, &id),
-                transform("odom", "base_link", 1_000 + i, &id),
-            ]
-        })
-        .collect();
+    let tf = identity_edges(&[("map", "odom"), ("odom", "base_link")], 5);
     let fixed = [transform("/base_link", "/imu", 0, &id)];
     write_recording(&rec, &tf, &fixed, None);
     let o = bin().arg("topics").arg(&rec).output().unwrap();
