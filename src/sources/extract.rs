@@ -15,8 +15,8 @@ use crate::error::{Error, Result};
 use crate::sources::mcap::{ChannelInfo, MessageRef, StreamOutcome};
 use crate::sources::tf_chain::{self, ChainRequest, TfCollector};
 use crate::sources::{
-    ExtractOptions, ExtractedTopic, Extraction, Progress, StampSource, StaticTransform, TopicInfo,
-    Warning,
+    ExtractOptions, ExtractedTopic, Extraction, Progress, Source, StampSource, StaticTransform,
+    TopicInfo, Warning,
 };
 use crate::trajectory::Trajectory;
 
@@ -29,6 +29,11 @@ pub type OnMessage<'a> = &'a mut dyn FnMut(&ChannelInfo, &MessageRef<'_>) -> Res
 pub trait Recording {
     /// What error messages name: the file or folder.
     fn path(&self) -> &Path;
+    /// Size of the recording in bytes (for progress bars and the report).
+    fn recording_size(&self) -> u64;
+    /// Every channel with its message count: from an index when the recording has one, else from a
+    /// pass that decodes nothing.
+    fn channel_counts(&self) -> Result<(Vec<ChannelInfo>, HashMap<u16, u64>)>;
     /// The channels when an index lists them without a pass (to fail fast on a wrong topic).
     fn known_channels(&self) -> Option<Vec<ChannelInfo>>;
     /// One pass over the messages. Channel ids must be unique across the whole recording.
@@ -47,6 +52,35 @@ pub trait Recording {
                 self.path().display()
             ),
         }
+    }
+}
+
+/// Every recording is a [`Source`]: its topics from its channel counts, its trajectories by
+/// [`extract`], its TF frames by [`crate::sources::tf_frames::frame_pairs`].
+impl<R: Recording> Source for R {
+    fn size_bytes(&self) -> u64 {
+        self.recording_size()
+    }
+
+    fn topics(&self) -> Result<Vec<TopicInfo>> {
+        let (channels, counts) = self.channel_counts()?;
+        Ok(topic_infos(channels, &counts))
+    }
+
+    fn extract(
+        &self,
+        topics: &[String],
+        options: &ExtractOptions,
+        progress: Progress<'_>,
+    ) -> Result<Extraction> {
+        extract(self, topics, options, progress)
+    }
+
+    fn frame_pairs(
+        &self,
+        progress: Progress<'_>,
+    ) -> Result<Vec<crate::sources::tf_frames::FramePair>> {
+        crate::sources::tf_frames::frame_pairs(self, progress)
     }
 }
 

@@ -12,9 +12,9 @@ use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::sources::extract::{self, OnMessage, Recording, Select};
+use crate::sources::extract::{OnMessage, Recording, Select};
 use crate::sources::mcap::{ChannelInfo, MessageRef, StreamOutcome};
-use crate::sources::{ExtractOptions, Extraction, Progress, Source, TopicInfo};
+use crate::sources::Progress;
 
 use records::{op, Fields, Next, MAGIC};
 
@@ -226,6 +226,20 @@ fn decompress(
 }
 
 impl Recording for BagSource {
+    fn recording_size(&self) -> u64 {
+        self.size
+    }
+
+    fn channel_counts(&self) -> Result<(Vec<ChannelInfo>, HashMap<u16, u64>)> {
+        Ok(match self.read_index() {
+            Some(x) => x,
+            None => {
+                let o = self.pass(&mut |_| false, &|_| {}, &mut |_, _| Ok(()))?;
+                (o.channels, o.message_counts)
+            }
+        })
+    }
+
     fn path(&self) -> &Path {
         &self.path
     }
@@ -317,38 +331,5 @@ impl Recording for BagSource {
         }
         out.bytes_read = pos;
         Ok(out)
-    }
-}
-
-impl Source for BagSource {
-    fn size_bytes(&self) -> u64 {
-        self.size
-    }
-
-    fn topics(&self) -> Result<Vec<TopicInfo>> {
-        let (channels, counts) = match self.read_index() {
-            Some(x) => x,
-            None => {
-                let o = self.pass(&mut |_| false, &|_| {}, &mut |_, _| Ok(()))?;
-                (o.channels, o.message_counts)
-            }
-        };
-        Ok(extract::topic_infos(channels, &counts))
-    }
-
-    fn extract(
-        &self,
-        topics: &[String],
-        options: &ExtractOptions,
-        progress: Progress<'_>,
-    ) -> Result<Extraction> {
-        extract::extract(self, topics, options, progress)
-    }
-
-    fn frame_pairs(
-        &self,
-        progress: Progress<'_>,
-    ) -> Result<Vec<crate::sources::tf_frames::FramePair>> {
-        crate::sources::tf_frames::frame_pairs(self, progress)
     }
 }

@@ -7,12 +7,13 @@
 pub mod stream;
 pub mod summary;
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use crate::decode::MessageKind;
 use crate::error::{Error, Result};
 use crate::sources::extract::{self, OnMessage, Recording, Select};
-use crate::sources::{ExtractOptions, Extraction, Progress, Source, TopicInfo, Warning};
+use crate::sources::{Progress, Warning};
 
 pub use stream::{for_each_message, ChannelInfo, MessageRef, StreamOutcome};
 pub use summary::{read_summary, SummaryInfo};
@@ -50,6 +51,23 @@ pub fn readable_kind(c: &ChannelInfo) -> Option<MessageKind> {
 }
 
 impl Recording for McapSource {
+    fn recording_size(&self) -> u64 {
+        self.size
+    }
+
+    fn channel_counts(&self) -> Result<(Vec<ChannelInfo>, HashMap<u16, u64>)> {
+        Ok(match read_summary(&self.path) {
+            Some(SummaryInfo {
+                channels,
+                message_counts: Some(counts),
+            }) => (channels, counts),
+            _ => {
+                let outcome = for_each_message(&self.path, |_| false, &|_| {}, |_, _| Ok(()))?;
+                (outcome.channels, outcome.message_counts)
+            }
+        })
+    }
+
     fn path(&self) -> &Path {
         &self.path
     }
@@ -75,42 +93,5 @@ impl Recording for McapSource {
                 self.path.display()
             ),
         }
-    }
-}
-
-impl Source for McapSource {
-    fn size_bytes(&self) -> u64 {
-        self.size
-    }
-
-    fn topics(&self) -> Result<Vec<TopicInfo>> {
-        let summary = read_summary(&self.path);
-        let (channels, counts) = match summary {
-            Some(SummaryInfo {
-                channels,
-                message_counts: Some(counts),
-            }) => (channels, counts),
-            _ => {
-                let outcome = for_each_message(&self.path, |_| false, &|_| {}, |_, _| Ok(()))?;
-                (outcome.channels, outcome.message_counts)
-            }
-        };
-        Ok(extract::topic_infos(channels, &counts))
-    }
-
-    fn extract(
-        &self,
-        topics: &[String],
-        options: &ExtractOptions,
-        progress: Progress<'_>,
-    ) -> Result<Extraction> {
-        extract::extract(self, topics, options, progress)
-    }
-
-    fn frame_pairs(
-        &self,
-        progress: Progress<'_>,
-    ) -> Result<Vec<crate::sources::tf_frames::FramePair>> {
-        crate::sources::tf_frames::frame_pairs(self, progress)
     }
 }

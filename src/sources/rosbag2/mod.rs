@@ -12,9 +12,9 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::sources::extract::{self, OnMessage, Recording, Select};
+use crate::sources::extract::{OnMessage, Recording, Select};
 use crate::sources::mcap::{for_each_message, ChannelInfo, MessageRef, StreamOutcome};
-use crate::sources::{ExtractOptions, Extraction, Progress, Source, TopicInfo};
+use crate::sources::Progress;
 
 use metadata::Metadata;
 
@@ -111,6 +111,14 @@ impl Rosbag2Source {
 }
 
 impl Recording for Rosbag2Source {
+    fn recording_size(&self) -> u64 {
+        self.size
+    }
+
+    fn channel_counts(&self) -> Result<(Vec<ChannelInfo>, HashMap<u16, u64>)> {
+        Ok((self.channels.clone(), self.counts.clone()))
+    }
+
     fn path(&self) -> &Path {
         &self.dir
     }
@@ -175,31 +183,5 @@ impl Recording for Rosbag2Source {
         }
         out.bytes_read = done;
         Ok(out)
-    }
-}
-
-impl Source for Rosbag2Source {
-    fn size_bytes(&self) -> u64 {
-        self.size
-    }
-
-    fn topics(&self) -> Result<Vec<TopicInfo>> {
-        Ok(extract::topic_infos(self.channels.clone(), &self.counts))
-    }
-
-    fn extract(
-        &self,
-        topics: &[String],
-        options: &ExtractOptions,
-        progress: Progress<'_>,
-    ) -> Result<Extraction> {
-        extract::extract(self, topics, options, progress)
-    }
-
-    fn frame_pairs(
-        &self,
-        progress: Progress<'_>,
-    ) -> Result<Vec<crate::sources::tf_frames::FramePair>> {
-        crate::sources::tf_frames::frame_pairs(self, progress)
     }
 }
