@@ -217,20 +217,9 @@ fn evaluate_estimate(
             method: "given".into(),
             offset_s: dt,
             applied_s: dt,
-            correlation: None,
-            confidence: None,
             status: "given".into(),
-            methods: Vec::new(),
             reason: Some("given with --time-offset".into()),
-            implied_lever_arm_m: None,
-            first_third_s: None,
-            last_third_s: None,
-            drift_ppm: None,
-            drift_resolution_ppm: None,
-            drift_measured_ppm: None,
-            drift_sigma_ppm: None,
-            first_third_sigma_s: None,
-            last_third_sigma_s: None,
+            ..Default::default()
         },
         None => {
             let params = config.offset_params();
@@ -335,14 +324,7 @@ fn evaluate_estimate(
                         methods,
                         reason: Some(reason),
                         implied_lever_arm_m: implied_lever,
-                        first_third_s: None,
-                        last_third_s: None,
-                        drift_ppm: None,
-                        drift_resolution_ppm: None,
-                        drift_measured_ppm: None,
-                        drift_sigma_ppm: None,
-                        first_third_sigma_s: None,
-                        last_third_sigma_s: None,
+                        ..Default::default()
                     }
                 }
             }

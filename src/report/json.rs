@@ -140,7 +140,7 @@ pub struct ExtrinsicsReport {
 }
 
 /// The clock offset: what each method found and what was applied.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct TimeOffsetReport {
     /// The method whose answer is reported (`given` when `--time-offset` was used).
     pub method: String,
