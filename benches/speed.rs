@@ -44,4 +44,39 @@ fn main() {
             start.elapsed().as_secs_f64() * 1e3 / reps as f64
         );
     }
+    long_mission();
+}
+
+/// A two-hour mission (60 laps of the default route: 10 Hz reference, 20 Hz estimate), the length the
+/// clock drift is measured for, written to a temporary MCAP and evaluated once with the defaults.
+fn long_mission() {
+    use trajdrift::simulate::{default_route, simulate, writer::write_mcap, MissionConfig};
+    let route: Vec<_> = std::iter::repeat_n(default_route(), 60).flatten().collect();
+    let mission = simulate(&MissionConfig::default(), &route);
+    let dir = tempfile::tempdir().expect("temporary folder");
+    let rec = dir.path().join("long.mcap");
+    let file = std::fs::File::create(&rec).expect("temporary file");
+    write_mcap(std::io::BufWriter::new(file), &mission, 0).expect("write the mission");
+    let mut c = EvalConfig::new(
+        Some(rec),
+        NamedInput::topic("/reference/position"),
+        vec![NamedInput::topic("/estimate/odom")],
+    );
+    c.windows_m = vec![1.0, 5.0, 10.0, 20.0];
+    let start = Instant::now();
+    match evaluate(&c, &|_| {}) {
+        Ok(r) => {
+            let o = &r.estimates[0].time_offset;
+            println!(
+                "speed: 2-hour mission ({:.0} s) {:8.1} s per eval (Δt {:+.4} s, drift {:?} ppm, measured {:?} ± {:?})",
+                mission.duration_s,
+                start.elapsed().as_secs_f64(),
+                o.offset_s,
+                o.drift_ppm,
+                o.drift_measured_ppm.map(|v| v.round()),
+                o.drift_sigma_ppm.map(|v| v.round()),
+            );
+        }
+        Err(e) => eprintln!("speed: 2-hour mission: {e}"),
+    }
 }
