@@ -165,7 +165,10 @@ fn injected_spread(
     // Noise moves the answer by milliseconds: a coarser fine grid (its parabolic refinement still
     // resolves a fraction of a step) keeps the injections cheap on hour-long thirds.
     let injected = OffsetParams {
-        grid_s: params.grid_s.max(INJECTION_GRID_S).min(params.coarse_grid_s),
+        grid_s: params
+            .grid_s
+            .max(INJECTION_GRID_S)
+            .min(params.coarse_grid_s),
         ..*params
     };
     let deviations: Vec<f64> = (0..INJECTIONS as u64)

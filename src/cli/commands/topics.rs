@@ -30,17 +30,27 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
         .max()
         .unwrap_or(5)
         .max(5);
+    let type_width = topics
+        .iter()
+        .map(|t| t.type_name.len())
+        .max()
+        .unwrap_or(4)
+        .max(4);
     println!(
-        "{:<width$}  {:<36} {:>9}  trajectory",
+        "{:<width$}  {:<type_width$} {:>9}  trajectory",
         "topic", "type", "messages"
     );
     for t in &topics {
+        let readable = if t.readable {
+            "yes"
+        } else if !t.frame_pairs.is_empty() {
+            "as /tf:PARENT:CHILD"
+        } else {
+            "no"
+        };
         println!(
-            "{:<width$}  {:<36} {:>9}  {}",
-            t.topic,
-            t.type_name,
-            t.message_count,
-            if t.readable { "yes" } else { "no" }
+            "{:<width$}  {:<type_width$} {:>9}  {readable}",
+            t.topic, t.type_name, t.message_count
         );
     }
     println!("presets matching: {}", presets_line(&presets));
