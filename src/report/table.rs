@@ -15,11 +15,13 @@ pub fn render(report: &Report) -> String {
     let p = &report.parameters;
     let _ = writeln!(
         s,
-        "reference {} ({}, {} samples); ε curvature {} m, path {} m, Δt_max {} s, lever correction {}",
+        "reference {} ({}, {} samples); ε curvature {:.2} m{}, path {:.2} m, Δt_max {} s, lever correction {}",
         report.reference.topic,
         report.reference.type_name,
         report.reference.samples,
         p.curvature_eps_m,
+        p.curvature_dt_max_s
+            .map_or(String::new(), |d| format!(" (Δt_max {d:.1} s)")),
         p.path_eps_m,
         p.dt_max_s,
         p.lever_correction
@@ -44,13 +46,21 @@ pub fn render(report: &Report) -> String {
         for m in &o.methods {
             let _ = writeln!(
                 s,
-                "    {:<10} {}  ρ {}  confidence {}  {}",
+                "    {:<16} {}  ρ {}  confidence {}  {}",
                 m.method,
                 m.offset_s
                     .map_or("      -".into(), |v| format!("{v:+.4} s")),
                 m.correlation.map_or("-".into(), |c| format!("{c:.3}")),
                 m.confidence.map_or("-".into(), |c| format!("{c:.2}")),
                 m.error.as_deref().unwrap_or(&m.status)
+            );
+        }
+        if let (Some(d), Some(m), Some(sd)) = (o.drift_ppm, o.drift_measured_ppm, o.drift_sigma_ppm)
+        {
+            let _ = writeln!(
+                s,
+                "    clock drift {d:+.0} ppm (measured {m:+.0} ± {sd:.0} ppm between the first and last thirds{})",
+                if d == 0.0 { "; not beyond 3σ, a constant offset fits" } else { "" }
             );
         }
         let _ = writeln!(
