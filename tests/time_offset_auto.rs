@@ -224,6 +224,24 @@ fn a_drifting_clock_is_recovered() {
     assert!((d.measured_ppm + 200.0).abs() < 3.0 * d.sigma_ppm, "{d:?}");
 }
 
+/// legged_spins' estimate sensor is 0.5 m beside the reference point and sweeps an arc in each of its
+/// six turns in place: over the whole mission signed curvature leads speed by ~0.4 s, which is no
+/// lever-arm lead. With the reference's stands left out it agrees with speed, and no
+/// `lever_arm_suspected` is raised; on gnss_outages and legged (sensors 0.3 and 0.2 m ahead) it still is.
+#[test]
+fn turns_in_place_do_not_fake_a_lever_arm() {
+    let Some(shared) = shared() else { return };
+    for (m, lever_ahead) in [
+        ("legged_spins", false),
+        ("gnss_outages", true),
+        ("legged", true),
+    ] {
+        let rep = eval_defaults(&mission(&shared, m));
+        let warned = rep.warnings.iter().any(|w| w.code == "lever_arm_suspected");
+        assert_eq!(warned, lever_ahead, "{m}: {:?}", rep.warnings);
+    }
+}
+
 // ---- one test per failure mode of the curvature methods ----
 
 /// κ noise grows like σ/ε²: at the paper's ε (3σ-ish, 0.1 m) on 2 cm white noise the curvature peak

@@ -12,14 +12,19 @@
 //! disagree by more than [`AGREE_S`] and [`MIN_LEVER_M`]/v, the gap is read as the lead of a longitudinal lever arm
 //! Δx = v·(Δt_curv − Δt_speed) (v: the reference's mean speed while moving) and reported as a
 //! `lever_arm_suspected` warning; a gap no plausible lever arm explains (|Δx| > [`MAX_LEVER_M`])
-//! makes the answer `weak`. Signed curvature alone is applied with a `lever_arm_unchecked` warning
-//! (speed cannot rule the lead out). Nothing confident: `weak`.
+//! makes the answer `weak`. Before a disagreement is judged, signed curvature is measured again with
+//! the reference's stands left out ([`crate::align::still`]): a turn in place seen by a sensor beside
+//! the reference point otherwise fakes a lead of several tenths of a second. Signed curvature alone
+//! is applied with a `lever_arm_unchecked` warning (speed cannot rule the lead out). Nothing
+//! confident: `weak`.
 
 use nalgebra::Vector3;
 
 use crate::align::auto_params::moving_speed;
+use crate::align::still::still_intervals;
 use crate::align::time_offset::{
-    estimate_time_offset, OffsetEstimate, OffsetMethod, OffsetParams, OffsetStatus,
+    estimate_time_offset, estimate_time_offset_excluding, OffsetEstimate, OffsetMethod,
+    OffsetParams, OffsetStatus,
 };
 use crate::error::Result;
 use crate::sources::Warning;
@@ -182,11 +187,46 @@ pub fn auto_time_offset(
             .find(|(k, _)| *k == m)
             .and_then(|(_, r)| r.as_ref().ok())
     };
-    let decision = decide(
-        get(OffsetMethod::Speed),
-        get(OffsetMethod::SignedCurvature),
-        mean_speed_mps,
+    let ok = |o: Option<&OffsetEstimate>| o.filter(|o| o.status == OffsetStatus::Ok).copied();
+    let (speed, mut signed) = (
+        ok(get(OffsetMethod::Speed)),
+        ok(get(OffsetMethod::SignedCurvature)),
     );
+    // Before a disagreement is read as a lever arm: the reference's stands (turns in place) left out
+    // of the signed curvature, the estimate's at the speed answer (see `crate::align::still`).
+    let mut stands_left_out = None;
+    if let (Some(s), Some(c), Some(v)) = (speed, signed, mean_speed_mps) {
+        if (c.offset_s - s.offset_s).abs() > AGREE_S {
+            let margin = params.curvature.eps_m / v;
+            let on_ref = still_intervals(ref_t, ref_p, gap, margin);
+            if !on_ref.is_empty() {
+                let on_est: Vec<(f64, f64)> = on_ref
+                    .iter()
+                    .map(|&(a, b)| (a - s.offset_s, b - s.offset_s))
+                    .collect();
+                if let Ok(m) = estimate_time_offset_excluding(
+                    OffsetMethod::SignedCurvature,
+                    ref_t,
+                    ref_p,
+                    est_t,
+                    est_p,
+                    params,
+                    &on_ref,
+                    &on_est,
+                ) {
+                    stands_left_out = Some((on_ref.len(), c.offset_s, m.offset_s));
+                    signed = (m.status == OffsetStatus::Ok).then_some(m);
+                }
+            }
+        }
+    }
+    let mut decision = decide(speed.as_ref(), signed.as_ref(), mean_speed_mps);
+    if let Some((n, plain, masked)) = stands_left_out {
+        decision.reason = format!(
+            "{} (signed-curvature {plain:+.3} s over the whole mission, {masked:+.3} s without the reference's {n} stand(s))",
+            decision.reason
+        );
+    }
     let estimate = match decision.applied.and_then(get) {
         Some(o) => *o,
         None => {

@@ -7,5 +7,6 @@ pub mod curvature;
 pub mod grid;
 pub mod offset_sigma;
 pub mod speed;
+pub mod still;
 pub mod time_offset;
 pub mod xcorr;

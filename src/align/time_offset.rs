@@ -179,6 +179,23 @@ pub fn estimate_time_offset(
     est_p: &[Vector3<f64>],
     params: &OffsetParams,
 ) -> Result<OffsetEstimate> {
+    estimate_time_offset_excluding(method, ref_t, ref_p, est_t, est_p, params, &[], &[])
+}
+
+/// [`estimate_time_offset`] with the signal samples stamped inside `ref_exclude` (reference clock)
+/// or `est_exclude` (estimate clock) left out: intervals where the two signals are known not to
+/// describe the same motion (a turn in place seen by one sensor only).
+#[allow(clippy::too_many_arguments)]
+pub fn estimate_time_offset_excluding(
+    method: OffsetMethod,
+    ref_t: &[f64],
+    ref_p: &[Vector3<f64>],
+    est_t: &[f64],
+    est_p: &[Vector3<f64>],
+    params: &OffsetParams,
+    ref_exclude: &[(f64, f64)],
+    est_exclude: &[(f64, f64)],
+) -> Result<OffsetEstimate> {
     check_params(params)?;
     if method == OffsetMethod::Auto {
         return crate::align::auto_offset::auto_time_offset(ref_t, ref_p, est_t, est_p, params)
@@ -214,8 +231,8 @@ pub fn estimate_time_offset(
         }
         Ok(s)
     };
-    let (rt, rv) = signal(ref_t, ref_p, "reference")?;
-    let (et, ev) = signal(est_t, est_p, "estimate")?;
+    let (rt, rv) = without(signal(ref_t, ref_p, "reference")?, ref_exclude);
+    let (et, ev) = without(signal(est_t, est_p, "estimate")?, est_exclude);
     let centering = match method {
         OffsetMethod::Speed if params.speed_mean_removed => Centering::MeanRemoved,
         OffsetMethod::SignedCurvature | OffsetMethod::Auto => Centering::MeanRemoved,
@@ -327,6 +344,18 @@ pub fn estimate_time_offset(
         defined_fraction,
         sigma_s,
     })
+}
+
+/// The samples of `(t, v)` outside every interval of `exclude` (the grid does not interpolate across
+/// the hole when it is longer than the largest gap bridged).
+fn without((t, v): (Vec<f64>, Vec<f64>), exclude: &[(f64, f64)]) -> (Vec<f64>, Vec<f64>) {
+    if exclude.is_empty() {
+        return (t, v);
+    }
+    t.into_iter()
+        .zip(v)
+        .filter(|(ti, _)| !exclude.iter().any(|&(a, b)| *ti >= a && *ti <= b))
+        .unzip()
 }
 
 fn check_params(p: &OffsetParams) -> Result<()> {
