@@ -4,7 +4,6 @@
 
 mod common;
 
-use nalgebra::Vector3;
 use trajdrift::align::auto_offset::{auto_time_offset, Verdict};
 use trajdrift::align::auto_params::auto_params;
 use trajdrift::align::clock_drift::clock_drift;
@@ -17,28 +16,8 @@ use trajdrift::eval::evaluate;
 use trajdrift::report::json::Report;
 use trajdrift::simulate::motion::Segment;
 use trajdrift::simulate::{default_route, simulate, Mission, MissionConfig};
-use trajdrift::sources::tum::read_tum;
 
-use common::{mission, shared, truth, MISSIONS};
-
-struct Tum {
-    ref_t: Vec<f64>,
-    ref_p: Vec<Vector3<f64>>,
-    est_t: Vec<f64>,
-    est_p: Vec<Vector3<f64>>,
-}
-
-fn load_tum(dir: &std::path::Path) -> Tum {
-    let r = read_tum(&dir.join("reference.tum")).unwrap();
-    let e = read_tum(&dir.join("estimate.tum")).unwrap();
-    let t0 = r.stamps_ns[0];
-    Tum {
-        ref_t: r.times_s(t0),
-        ref_p: r.positions.clone(),
-        est_t: e.times_s(t0),
-        est_p: e.positions.clone(),
-    }
-}
+use common::{load, mission, shared, truth, MISSIONS};
 
 /// Every method × mission × (ε, Δt_max). Run with
 /// `TRAJDRIFT_SHARED=/work/shared cargo test --release --test time_offset_auto -- --ignored --nocapture eps_table`.
@@ -47,10 +26,8 @@ fn load_tum(dir: &std::path::Path) -> Tum {
 fn eps_table() {
     let Some(shared) = shared() else { return };
     for m in MISSIONS {
-        let d = load_tum(&mission(&shared, m));
-        let dt = truth(&shared, m)["time_offset"]["dt_true_s"]
-            .as_f64()
-            .unwrap();
+        let d = load(&shared, m);
+        let dt = d.dt_true;
         let a = auto_params(&d.ref_t, &d.ref_p, 5.0, 2.0);
         println!("{m}: auto {a:?}");
         for (eps, dtm) in [
@@ -401,10 +378,8 @@ fn auto_table() {
 fn thirds_table() {
     let Some(shared) = shared() else { return };
     for m in MISSIONS {
-        let d = load_tum(&mission(&shared, m));
-        let dt = truth(&shared, m)["time_offset"]["dt_true_s"]
-            .as_f64()
-            .unwrap();
+        let d = load(&shared, m);
+        let dt = d.dt_true;
         let a = auto_params(&d.ref_t, &d.ref_p, 5.0, 2.0);
         for w in [1.0, 2.0, 4.0] {
             let p = OffsetParams {
