@@ -19,7 +19,7 @@
 //! [`INJECTIONS`] times with fresh white noise of each trajectory's own measured σ added, and the
 //! spread of the answers is how much noise of that size moves it (the residual cannot see this: at
 //! the correlation peak the noise that moved the peak is no longer in the residual). On the shared
-//! missions the thirds' errors then fall within about 2σ (tests/time_offset_auto.rs `thirds_table`).
+//! missions the thirds' errors then fall within 2.5σ (tests/time_offset_auto.rs `thirds_table`).
 //!
 //! **What is reported.** `measured_ppm` and its `sigma_ppm` always; `drift_ppm` is the measured drift
 //! when it exceeds [`SIGNIFICANCE`]·σ, and 0 otherwise: a constant offset is kept unless the data
