@@ -172,3 +172,80 @@ fn a_folder_of_recordings_with_annotate() {
     let bad = batch(&[recs.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert_eq!(bad.status.code(), Some(2));
 }
+
+/// `--shard auto` under a scheduler's variables: two tasks write into ONE output folder (each its own
+/// `summary-shard-I-of-2.*`, no clash), and `merge` of that folder equals the whole run.
+#[test]
+fn shard_auto_under_slurm_and_kubernetes_merges_to_the_whole_run() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let m = manifest(&shared, d);
+    let ms = m.to_str().unwrap();
+    let out = |n: &str| d.join(n).to_str().unwrap().to_string();
+    let whole = batch(&[ms, "--jobs", "2", "--out", &out("whole")]);
+    assert_eq!(whole.status.code(), Some(1));
+
+    let slurm = |task: &str| -> Vec<(&str, String)> {
+        vec![
+            ("SLURM_ARRAY_TASK_ID", task.to_string()),
+            ("SLURM_ARRAY_TASK_MIN", "0".into()),
+            ("SLURM_ARRAY_TASK_COUNT", "2".into()),
+        ]
+    };
+    let kube = |index: &str| -> Vec<(&str, String)> {
+        vec![
+            ("JOB_COMPLETION_INDEX", index.to_string()),
+            ("TRAJDRIFT_SHARDS", "2".into()),
+        ]
+    };
+    let runs: [(&str, [Vec<(&str, String)>; 2]); 2] = [
+        ("slurm", [slurm("0"), slurm("1")]),
+        ("kube", [kube("0"), kube("1")]),
+    ];
+    for (name, tasks) in runs {
+        let folder = out(name);
+        for vars in tasks {
+            let o = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+                .args(["batch", ms, "--jobs", "1", "--shard", "auto", "--quiet"])
+                .args(["--out", &folder])
+                .env_remove("SLURM_ARRAY_TASK_ID")
+                .env_remove("JOB_COMPLETION_INDEX")
+                .envs(vars)
+                .output()
+                .unwrap();
+            assert!(
+                matches!(o.status.code(), Some(0 | 1 | 3)),
+                "{name}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+        }
+        for i in 1..=2 {
+            assert!(d
+                .join(name)
+                .join(format!("summary-shard-{i}-of-2.json"))
+                .exists());
+        }
+        assert!(!d.join(name).join("summary.json").exists());
+        let merged = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+            .args(["merge", &folder, "--quiet"])
+            .output()
+            .unwrap();
+        assert_eq!(merged.status.code(), Some(1), "{name}: the broken mission");
+        assert_eq!(
+            load(&d.join(name).join("summary.json")),
+            load(&d.join("whole/summary.json")),
+            "{name}"
+        );
+    }
+
+    let none = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+        .args(["batch", ms, "--shard", "auto", "--out", &out("none")])
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .env_remove("JOB_COMPLETION_INDEX")
+        .output()
+        .unwrap();
+    assert_eq!(none.status.code(), Some(2));
+}

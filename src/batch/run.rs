@@ -120,7 +120,10 @@ pub fn run_batch(
     }
     results.sort_by(|a, b| a.mission.cmp(&b.mission));
     let summary = Summary::build(&results);
-    summary.write(&opts.out_dir)?;
+    match opts.shard {
+        Some(shard) => summary.write_as(&opts.out_dir, &shard.summary_stem())?,
+        None => summary.write(&opts.out_dir)?,
+    }
     Ok(BatchOutcome {
         results,
         skipped,

@@ -1,8 +1,10 @@
-//! `--shard I/N`: a deterministic subset of a manifest, so that N independent jobs (a Slurm array, any
-//! cluster scheduler) cover every mission exactly once; `trajdrift merge` then builds the summary.
+//! `--shard I/N` and `--shard auto`: a deterministic subset of a batch, so that N independent jobs (a
+//! Slurm job array, a Kubernetes Indexed Job, any scheduler) cover every mission exactly once;
+//! `trajdrift merge` then builds the summary.
 //!
 //! Missions are ordered by name and shard I keeps those at positions p with p mod N = I − 1: the split
-//! depends only on the names, not on the manifest's order or the machine.
+//! depends only on the names, not on the manifest's order or the machine. `auto` reads the scheduler's
+//! variables, which count from 0 (Slurm from the array's first index), where `--shard` counts from 1.
 
 use crate::error::{Error, Result};
 
@@ -18,7 +20,8 @@ impl std::str::FromStr for Shard {
 
     /// Parses `I/N` with 1 ≤ I ≤ N.
     fn from_str(s: &str) -> Result<Shard> {
-        let bad = || Error::InvalidArgument(format!("--shard {s}: expected I/N with 1 ≤ I ≤ N"));
+        let bad =
+            || Error::InvalidArgument(format!("--shard {s}: expected I/N with 1 ≤ I ≤ N, or auto"));
         let (i, n) = s.split_once('/').ok_or_else(bad)?;
         let (index, count) = (
             i.trim().parse::<usize>().map_err(|_| bad())?,
@@ -31,7 +34,101 @@ impl std::str::FromStr for Shard {
     }
 }
 
+/// The environment variable that gives the shard count to a Kubernetes Indexed Job (or any scheduler
+/// that only gives an index) when `--shards` is not passed.
+pub const SHARDS_VAR: &str = "TRAJDRIFT_SHARDS";
+
 impl Shard {
+    /// The shard named by `--shard` (`I/N` or `auto`); `shards` is `--shards N`; `env` looks up an
+    /// environment variable (a parameter so that tests need not touch the process environment).
+    pub fn resolve(
+        spec: &str,
+        shards: Option<usize>,
+        env: &dyn Fn(&str) -> Option<String>,
+    ) -> Result<Shard> {
+        if spec.trim() != "auto" {
+            let s: Shard = spec.parse()?;
+            return match shards {
+                Some(n) if n != s.count => Err(Error::InvalidArgument(format!(
+                    "--shard {spec} and --shards {n} disagree on the shard count"
+                ))),
+                _ => Ok(s),
+            };
+        }
+        if env("SLURM_ARRAY_TASK_ID").is_some() {
+            return Shard::from_slurm(shards, env);
+        }
+        if env("JOB_COMPLETION_INDEX").is_some() {
+            return Shard::from_kubernetes(shards, env);
+        }
+        Err(Error::InvalidArgument(
+            "--shard auto: neither SLURM_ARRAY_TASK_ID (a Slurm job array) nor JOB_COMPLETION_INDEX \
+             (a Kubernetes Indexed Job) is set; pass --shard I/N"
+                .into(),
+        ))
+    }
+
+    /// A Slurm job array: task `ID` of `COUNT` tasks numbered from `MIN` in steps of `STEP`.
+    fn from_slurm(shards: Option<usize>, env: &dyn Fn(&str) -> Option<String>) -> Result<Shard> {
+        let id = env_number(env, "SLURM_ARRAY_TASK_ID")?.unwrap_or(0);
+        let min = env_number(env, "SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
+        let step = env_number(env, "SLURM_ARRAY_TASK_STEP")?
+            .unwrap_or(1)
+            .max(1);
+        let count = match (env_number(env, "SLURM_ARRAY_TASK_COUNT")?, shards) {
+            (Some(c), Some(n)) if c != n => {
+                return Err(Error::InvalidArgument(format!(
+                    "--shards {n} disagrees with SLURM_ARRAY_TASK_COUNT={c}; drop --shards or resize the array"
+                )))
+            }
+            (Some(c), _) | (None, Some(c)) => c,
+            (None, None) => {
+                return Err(Error::InvalidArgument(
+                    "--shard auto: SLURM_ARRAY_TASK_COUNT is not set (Slurm sets it for job arrays); pass --shards N"
+                        .into(),
+                ))
+            }
+        };
+        if id < min || (id - min) % step != 0 {
+            return Err(Error::InvalidArgument(format!(
+                "--shard auto: SLURM_ARRAY_TASK_ID={id} is not in the array {min}, {min}+{step}, …"
+            )));
+        }
+        Shard::checked((id - min) / step, count, "SLURM_ARRAY_TASK_ID")
+    }
+
+    /// A Kubernetes Indexed Job: `JOB_COMPLETION_INDEX` from 0, the count from `--shards` or
+    /// [`SHARDS_VAR`] (the Job's `completions`).
+    fn from_kubernetes(
+        shards: Option<usize>,
+        env: &dyn Fn(&str) -> Option<String>,
+    ) -> Result<Shard> {
+        let index = env_number(env, "JOB_COMPLETION_INDEX")?.unwrap_or(0);
+        let count = match shards {
+            Some(n) => n,
+            None => env_number(env, SHARDS_VAR)?.ok_or_else(|| {
+                Error::InvalidArgument(format!(
+                    "--shard auto: JOB_COMPLETION_INDEX is set but not the shard count; pass --shards N or set {SHARDS_VAR} to the Job's completions"
+                ))
+            })?,
+        };
+        Shard::checked(index, count, "JOB_COMPLETION_INDEX")
+    }
+
+    /// Shard `zero_based + 1` of `count`, refused when outside 1..=count.
+    fn checked(zero_based: usize, count: usize, var: &str) -> Result<Shard> {
+        if count == 0 || zero_based >= count {
+            return Err(Error::InvalidArgument(format!(
+                "--shard auto: {var} gives shard {} of {count}; the shard count must exceed the index",
+                zero_based + 1
+            )));
+        }
+        Ok(Shard {
+            index: zero_based + 1,
+            count,
+        })
+    }
+
     /// Which of `names` this shard runs: a mask in the order of `names`.
     pub fn select(&self, names: &[&str]) -> Vec<bool> {
         let mut order: Vec<usize> = (0..names.len()).collect();
@@ -42,6 +139,24 @@ impl Shard {
         }
         keep
     }
+
+    /// The stem of this shard's own summary files, so that shards sharing one output folder do not
+    /// overwrite each other's summary (`trajdrift merge` writes the `summary.*` of the whole run).
+    pub fn summary_stem(&self) -> String {
+        format!("summary-shard-{}-of-{}", self.index, self.count)
+    }
+}
+
+fn env_number(env: &dyn Fn(&str) -> Option<String>, var: &str) -> Result<Option<usize>> {
+    env(var)
+        .map(|v| {
+            v.trim().parse::<usize>().map_err(|_| {
+                Error::InvalidArgument(format!(
+                    "--shard auto: {var}={v:?} is not a non-negative integer"
+                ))
+            })
+        })
+        .transpose()
 }
 
 #[cfg(test)]
@@ -73,5 +188,52 @@ mod tests {
         assert!("0/3".parse::<Shard>().is_err());
         assert!("4/3".parse::<Shard>().is_err());
         assert!("x".parse::<Shard>().is_err());
+    }
+
+    fn vars(pairs: &[(&str, &str)]) -> impl Fn(&str) -> Option<String> {
+        let pairs: Vec<(String, String)> = pairs
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect();
+        move |k| pairs.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone())
+    }
+
+    #[test]
+    fn slurm_arrays_count_from_their_first_index() {
+        let env = vars(&[
+            ("SLURM_ARRAY_TASK_ID", "5"),
+            ("SLURM_ARRAY_TASK_MIN", "4"),
+            ("SLURM_ARRAY_TASK_COUNT", "3"),
+        ]);
+        let s = Shard::resolve("auto", None, &env).unwrap();
+        assert_eq!(s, Shard { index: 2, count: 3 });
+        let stepped = vars(&[
+            ("SLURM_ARRAY_TASK_ID", "4"),
+            ("SLURM_ARRAY_TASK_MIN", "0"),
+            ("SLURM_ARRAY_TASK_STEP", "2"),
+            ("SLURM_ARRAY_TASK_COUNT", "3"),
+        ]);
+        let s = Shard::resolve("auto", None, &stepped).unwrap();
+        assert_eq!(s, Shard { index: 3, count: 3 });
+        assert!(Shard::resolve("auto", Some(4), &env).is_err());
+    }
+
+    #[test]
+    fn kubernetes_needs_a_count() {
+        let env = vars(&[("JOB_COMPLETION_INDEX", "0")]);
+        assert!(Shard::resolve("auto", None, &env).is_err());
+        let s = Shard::resolve("auto", Some(2), &env).unwrap();
+        assert_eq!(s, Shard { index: 1, count: 2 });
+        let env = vars(&[("JOB_COMPLETION_INDEX", "1"), (SHARDS_VAR, "2")]);
+        let s = Shard::resolve("auto", None, &env).unwrap();
+        assert_eq!(s, Shard { index: 2, count: 2 });
+        let env = vars(&[("JOB_COMPLETION_INDEX", "2"), (SHARDS_VAR, "2")]);
+        assert!(Shard::resolve("auto", None, &env).is_err());
+    }
+
+    #[test]
+    fn auto_without_a_scheduler_is_a_usage_error() {
+        let err = Shard::resolve("auto", None, &vars(&[])).unwrap_err();
+        assert!(err.to_string().contains("--shard I/N"), "{err}");
     }
 }

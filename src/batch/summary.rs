@@ -263,14 +263,20 @@ impl Summary {
 
     /// Writes `summary.json`, `summary.csv` and `summary.md` into `dir`.
     pub fn write(&self, dir: &Path) -> Result<()> {
+        self.write_as(dir, "summary")
+    }
+
+    /// Writes `STEM.json`, `STEM.csv` and `STEM.md` into `dir` (a shard writes its own stem).
+    pub fn write_as(&self, dir: &Path, stem: &str) -> Result<()> {
+        let path = |ext: &str| dir.join(format!("{stem}.{ext}"));
         let mut json = serde_json::to_vec_pretty(self).map_err(|e| Error::Output {
-            path: dir.join("summary.json"),
+            path: path("json"),
             detail: e.to_string(),
         })?;
         json.push(b'\n');
-        write_output(&dir.join("summary.json"), &json)?;
-        write_output(&dir.join("summary.csv"), self.to_csv().as_bytes())?;
-        write_output(&dir.join("summary.md"), self.to_markdown().as_bytes())
+        write_output(&path("json"), &json)?;
+        write_output(&path("csv"), self.to_csv().as_bytes())?;
+        write_output(&path("md"), self.to_markdown().as_bytes())
     }
 }
 

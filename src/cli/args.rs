@@ -328,9 +328,15 @@ pub struct BatchArgs {
     /// Keep missions already done in --out (resume an interrupted run).
     #[arg(long)]
     pub skip_existing: bool,
-    /// Run only shard I of N (1-based); `trajdrift merge` builds the summary of all shards.
-    #[arg(long, value_name = "I/N")]
+    /// Run only shard I of N (1-based), or `auto`: the shard from a Slurm job array
+    /// (SLURM_ARRAY_TASK_ID/_MIN/_COUNT) or a Kubernetes Indexed Job (JOB_COMPLETION_INDEX). Each shard
+    /// writes its own summary-shard-I-of-N.*; `trajdrift merge` builds the summary of all shards.
+    #[arg(long, value_name = "I/N|auto")]
     pub shard: Option<String>,
+    /// The shard count for `--shard auto` when the scheduler gives only an index (Kubernetes);
+    /// default: the TRAJDRIFT_SHARDS variable.
+    #[arg(long, value_name = "N")]
+    pub shards: Option<usize>,
     /// Print nothing but errors and warnings.
     #[arg(long, short)]
     pub quiet: bool,

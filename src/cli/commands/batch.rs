@@ -35,7 +35,16 @@ pub fn run(a: BatchArgs) -> Result<u8> {
         }
         Manifest::from_toml(&a.input)?
     };
-    let shard = a.shard.as_deref().map(str::parse::<Shard>).transpose()?;
+    let shard = match a.shard.as_deref() {
+        Some(spec) => Some(Shard::resolve(spec, a.shards, &|v| std::env::var(v).ok())?),
+        None if a.shards.is_some() => {
+            return Err(trajdrift::Error::InvalidArgument(
+                "--shards N goes with --shard auto".into(),
+            )
+            .into())
+        }
+        None => None,
+    };
     let opts = BatchOptions {
         out_dir: a.out.clone(),
         jobs: a.jobs.unwrap_or(0),
