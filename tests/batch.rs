@@ -188,20 +188,21 @@ fn shard_auto_under_slurm_and_kubernetes_merges_to_the_whole_run() {
     let whole = batch(&[ms, "--jobs", "2", "--out", &out("whole")]);
     assert_eq!(whole.status.code(), Some(1));
 
-    let slurm = |task: &str| -> Vec<(&str, String)> {
+    type Vars = Vec<(&'static str, String)>;
+    let slurm = |task: &str| -> Vars {
         vec![
             ("SLURM_ARRAY_TASK_ID", task.to_string()),
             ("SLURM_ARRAY_TASK_MIN", "0".into()),
             ("SLURM_ARRAY_TASK_COUNT", "2".into()),
         ]
     };
-    let kube = |index: &str| -> Vec<(&str, String)> {
+    let kube = |index: &str| -> Vars {
         vec![
             ("JOB_COMPLETION_INDEX", index.to_string()),
             ("TRAJDRIFT_SHARDS", "2".into()),
         ]
     };
-    let runs: [(&str, [Vec<(&str, String)>; 2]); 2] = [
+    let runs: [(&str, [Vars; 2]); 2] = [
         ("slurm", [slurm("0"), slurm("1")]),
         ("kube", [kube("0"), kube("1")]),
     ];

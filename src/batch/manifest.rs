@@ -23,6 +23,9 @@
 //! that lacks the preset's topics fails the batch before any mission runs.
 //!
 //! A folder of recordings is the same with one mission per `.mcap` found (see [`Manifest::from_dir`]).
+//!
+//! Parameters are layered in one order ([`Parameters::layered`]): the preset's `[parameters]` <
+//! `[defaults]` < `[mission.parameters]` < the command line's flags.
 
 use std::path::{Path, PathBuf};
 
@@ -30,7 +33,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::eval::config::{EvalConfig, NamedInput};
-pub use crate::eval::overrides::Overrides;
+use crate::eval::parameters::Parameters;
 use crate::eval::preset::Preset;
 
 /// One mission as written in the manifest.
@@ -47,17 +50,53 @@ pub struct Mission {
     pub estimates: Vec<String>,
     /// A built-in preset, or a preset file relative to the manifest.
     pub preset: Option<String>,
+    /// Evaluation parameters over `[defaults]`, and optionally `preset`.
     #[serde(default)]
-    pub parameters: Overrides,
+    pub parameters: toml::Table,
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct File {
+    /// Evaluation parameters for every mission, and optionally `preset`.
     #[serde(default)]
-    defaults: Overrides,
+    defaults: toml::Table,
     #[serde(default)]
     mission: Vec<Mission>,
+}
+
+/// A manifest's parameter table: the evaluation parameters and, beside them, an optional `preset`
+/// (which topics to take; not a parameter).
+fn split_table(mut t: toml::Table, what: &str) -> Result<(Option<String>, Parameters)> {
+    let preset = match t.remove("preset") {
+        Some(toml::Value::String(s)) => Some(s),
+        Some(other) => {
+            return Err(Error::InvalidArgument(format!(
+                "{what}: preset = {other}: expected a preset name or file"
+            )))
+        }
+        None => None,
+    };
+    let parameters = t.try_into::<Parameters>().map_err(|e| {
+        Error::InvalidArgument(format!(
+            "{what}: {}",
+            e.to_string()
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ")
+        ))
+    })?;
+    Ok((preset, parameters))
+}
+
+/// What a folder of recordings runs: the same inputs and parameters for every mission.
+#[derive(Debug, Clone, Default)]
+pub struct FolderRequest {
+    pub reference: Option<String>,
+    /// `[NAME=]TOPIC`; empty: the preset's.
+    pub estimates: Vec<String>,
+    pub preset: Option<String>,
+    pub parameters: Parameters,
 }
 
 /// A mission ready to run: its name and its evaluation request.
@@ -82,8 +121,9 @@ fn valid_name(n: &str) -> bool {
 }
 
 impl Manifest {
-    /// Reads a TOML manifest; relative recording paths are relative to its folder.
-    pub fn from_toml(path: &Path) -> Result<Manifest> {
+    /// Reads a TOML manifest; relative recording paths are relative to its folder. `cli`: the
+    /// command line's parameters, over every mission's.
+    pub fn from_toml(path: &Path, cli: &Parameters) -> Result<Manifest> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let file: File = toml::from_str(&text).map_err(|e| {
             Error::InvalidArgument(format!(
@@ -93,6 +133,9 @@ impl Manifest {
             ))
         })?;
         let base = path.parent().unwrap_or(Path::new("."));
+        let origin = path.display().to_string();
+        let (default_preset, defaults) =
+            split_table(file.defaults, &format!("{origin}: [defaults]"))?;
         let mut missions = Vec::with_capacity(file.mission.len());
         for m in file.mission {
             let recording = base.join(&m.recording);
@@ -100,35 +143,19 @@ impl Manifest {
             let reference = m.reference.as_deref().map(NamedInput::topic);
             let estimates: Vec<NamedInput> =
                 m.estimates.iter().map(|e| NamedInput::topic(e)).collect();
-            let preset = m
-                .preset
-                .as_ref()
-                .or(m.parameters.preset.as_ref())
-                .or(file.defaults.preset.as_ref());
-            let in_mission = |e: Error| {
-                Error::InvalidArgument(format!("{}: mission {name}: {e}", path.display()))
-            };
-            let mut config = match preset {
-                Some(spec) => {
-                    let p = Preset::load_from(spec, base).map_err(in_mission)?;
-                    let s = p
-                        .select_in(Some(&recording), reference, estimates)
-                        .map_err(in_mission)?;
-                    let mut c = EvalConfig::new(Some(recording), s.reference, s.estimates);
-                    p.apply_parameters(&mut c, &[]).map_err(in_mission)?;
-                    c
-                }
-                None => {
-                    let reference = reference.ok_or_else(|| {
-                        in_mission(Error::InvalidArgument(
-                            "give reference = \"TOPIC\" or preset = \"NAME\"".into(),
-                        ))
-                    })?;
-                    EvalConfig::new(Some(recording), reference, estimates)
-                }
-            };
-            file.defaults.apply(&mut config)?;
-            m.parameters.apply(&mut config)?;
+            let (mission_preset, own) = split_table(
+                m.parameters,
+                &format!("{origin}: mission {name}: [mission.parameters]"),
+            )?;
+            let preset = m.preset.or(mission_preset).or(default_preset.clone());
+            let config = mission_config(
+                recording,
+                reference,
+                estimates,
+                preset.as_deref().map(|p| (p, base)),
+                &[&defaults, &own, cli],
+            )
+            .map_err(|e| Error::InvalidArgument(format!("{origin}: mission {name}: {e}")))?;
             missions.push(MissionSpec { name, config });
         }
         let manifest = Manifest { missions };
@@ -137,8 +164,9 @@ impl Manifest {
     }
 
     /// One mission per `.mcap` in `dir` or its direct subfolders, named by its path under `dir`
-    /// without the extension, `/` written `-` (`runs/a.mcap` → `runs-a`), sorted by name.
-    pub fn from_dir(dir: &Path, reference: &str, estimates: &[String]) -> Result<Manifest> {
+    /// without the extension, `/` written `-` (`runs/a.mcap` → `runs-a`), sorted by name; each
+    /// evaluated as `request` says.
+    pub fn from_dir(dir: &Path, request: &FolderRequest) -> Result<Manifest> {
         let mut found = Vec::new();
         collect_mcaps(dir, 2, &mut found)?;
         found.sort();
@@ -155,16 +183,23 @@ impl Manifest {
                         _ => '_',
                     })
                     .collect();
-                MissionSpec {
-                    name,
-                    config: EvalConfig::new(
-                        Some(p),
-                        NamedInput::topic(reference),
-                        estimates.iter().map(|e| NamedInput::topic(e)).collect(),
-                    ),
-                }
+                let config = mission_config(
+                    p,
+                    request.reference.as_deref().map(NamedInput::topic),
+                    request
+                        .estimates
+                        .iter()
+                        .map(|e| NamedInput::topic(e))
+                        .collect(),
+                    request.preset.as_deref().map(|s| (s, Path::new("."))),
+                    &[&request.parameters],
+                )
+                .map_err(|e| {
+                    Error::InvalidArgument(format!("{}: mission {name}: {e}", dir.display()))
+                })?;
+                Ok(MissionSpec { name, config })
             })
-            .collect();
+            .collect::<Result<Vec<_>>>()?;
         let manifest = Manifest { missions };
         manifest.check(&dir.display().to_string())?;
         Ok(manifest)
@@ -194,6 +229,37 @@ impl Manifest {
         }
         Ok(())
     }
+}
+
+/// One mission's request: its inputs (named, or picked by a preset loaded relative to its base
+/// folder) and its parameters, `layers` over the preset's from the lowest to the highest.
+fn mission_config(
+    recording: PathBuf,
+    reference: Option<NamedInput>,
+    estimates: Vec<NamedInput>,
+    preset: Option<(&str, &Path)>,
+    layers: &[&Parameters],
+) -> Result<EvalConfig> {
+    let (mut config, preset_parameters) = match preset {
+        Some((spec, base)) => {
+            let p = Preset::load_from(spec, base)?;
+            let s = p.select_in(Some(&recording), reference, estimates)?;
+            let c = EvalConfig::new(Some(recording), s.reference, s.estimates);
+            (c, p.parameters)
+        }
+        None => {
+            let reference = reference.ok_or_else(|| {
+                Error::InvalidArgument(
+                    "give a reference (reference = \"TOPIC\" or --reference) or a preset".into(),
+                )
+            })?;
+            let c = EvalConfig::new(Some(recording), reference, estimates);
+            (c, Parameters::default())
+        }
+    };
+    Parameters::layered(std::iter::once(&preset_parameters).chain(layers.iter().copied()))
+        .apply(&mut config)?;
+    Ok(config)
 }
 
 fn stem(p: &Path) -> String {
@@ -246,7 +312,7 @@ window = [2]
 "#,
         )
         .unwrap();
-        let m = Manifest::from_toml(&p).unwrap();
+        let m = Manifest::from_toml(&p, &Parameters::default()).unwrap();
         assert_eq!(m.missions[0].name, "mission");
         assert_eq!(m.missions[0].config.windows_m, vec![5.0, 10.0]);
         assert_eq!(m.missions[0].config.estimates[1].name, "pose");
@@ -264,10 +330,14 @@ window = [2]
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("m.toml");
         std::fs::write(&p, "[[mission]]\nrecording = \"a.mcap\"\nreference = \"/r\"\nestimates = [\"/e\"]\nwindows = [1]\n").unwrap();
-        let e = Manifest::from_toml(&p).unwrap_err().to_string();
+        let e = Manifest::from_toml(&p, &Parameters::default())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("windows"), "{e}");
         std::fs::write(&p, "[[mission]]\nrecording = \"a.mcap\"\nreference = \"/r\"\nestimates = [\"/e\"]\n[[mission]]\nrecording = \"x/a.mcap\"\nreference = \"/r\"\nestimates = [\"/e\"]\n").unwrap();
-        let e = Manifest::from_toml(&p).unwrap_err().to_string();
+        let e = Manifest::from_toml(&p, &Parameters::default())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("two missions"), "{e}");
     }
 }

@@ -4,6 +4,9 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+use trajdrift::eval::parameters::{triple, word, Parameters};
+use trajdrift::sources::StampSource;
+
 /// Evaluate robot trajectories from positions alone: curvature-based time alignment and Drift Error.
 #[derive(Debug, Parser)]
 #[command(name = "trajdrift", version, about, propagate_version = true)]
@@ -21,7 +24,7 @@ pub enum Command {
     /// Write a simulated mission (ROS 2 MCAP) with known truth.
     Simulate(SimulateArgs),
     /// Evaluate many missions in parallel (a TOML manifest, or a folder of recordings).
-    Batch(BatchArgs),
+    Batch(Box<BatchArgs>),
     /// Build a batch summary from the per-mission results of several folders (sharded runs).
     Merge(MergeArgs),
     /// Write one topic (or a text trajectory) as TUM or CSV text, e.g. for evo.
@@ -46,50 +49,11 @@ pub struct ExportArgs {
     pub format: ExportFormatArg,
     /// Output file (`-` = stdout).
     pub out: PathBuf,
-    /// Which stamp to use.
-    #[arg(long, value_enum, default_value = "header")]
-    pub stamp: StampArg,
+    /// Which stamp to use: header or log.
+    #[arg(long, value_name = "WORD", default_value = "header", value_parser = word::<StampSource>())]
+    pub stamp: StampSource,
     #[command(flatten)]
     pub text: TextArgs,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum PlatformArg {
-    /// the paper's ε 0.1 m, Δt_max as --dt-max
-    Legged,
-    /// the paper's ε 0.3 m, Δt_max as --dt-max
-    Wheeled,
-    /// ε and the curvature Δt_max from the reference's measured noise and speed
-    Auto,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum StampArg {
-    /// header.stamp (when the sensor measured)
-    Header,
-    /// MCAP log time (when the recorder received it)
-    Log,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum OffsetMethodArg {
-    /// unsigned curvature, eq. (2) (the paper)
-    Curvature,
-    /// windowed speed profile (blind at constant speed)
-    Speed,
-    /// signed horizontal curvature, mean-removed NCC
-    SignedCurvature,
-    /// run them all, apply a confident and consistent answer
-    Auto,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum LeverCorrectionArg {
-    /// α = r_ref/r_est where |r_est − r_ref| ≤ a (the paper)
-    Paper,
-    None,
-    /// fit s and the lateral lever d of L_est = s·(L_ref − d·Δψ) over all windows, correct by d
-    Fit,
 }
 
 #[derive(Debug, Args)]
@@ -109,66 +73,8 @@ pub struct EvalArgs {
     /// Estimate from a text file (TUM, KITTI, EuRoC, CSV), optionally named (repeatable).
     #[arg(long, value_name = "[NAME=]FILE")]
     pub estimate_file: Vec<String>,
-    /// Which stamp to use.
-    #[arg(long, value_enum, default_value = "header")]
-    pub stamp: StampArg,
-    /// ENU origin for NavSatFix topics: lat,lon,h (default: the first valid fix).
-    #[arg(long, value_name = "LAT,LON,H", allow_hyphen_values = true)]
-    pub origin: Option<String>,
-    /// Platform: the paper's ε_min (legged 0.1 m, wheeled 0.3 m), or auto: measured on the reference.
-    #[arg(long, value_enum, default_value = "auto")]
-    pub platform: PlatformArg,
-    /// ε_min for both curvature and path length (the paper's single ε), metres.
-    #[arg(long, value_name = "M")]
-    pub eps_min: Option<f64>,
-    /// ε for curvature, metres (overrides --eps-min).
-    #[arg(long, value_name = "M")]
-    pub curvature_eps: Option<f64>,
-    /// ε for path-length decimation, metres (overrides --eps-min).
-    #[arg(long, value_name = "M")]
-    pub path_eps: Option<f64>,
-    /// θ_max: turning angles above it are discontinuities, radians.
-    #[arg(long, value_name = "RAD", default_value_t = std::f64::consts::FRAC_PI_2)]
-    pub theta_max: f64,
-    /// Δt_max: a chord slower than this marks a stationary robot or a gap, seconds [default: 2 for
-    /// gaps and standstills; the curvature's from the robot's speed with --platform auto].
-    #[arg(long, value_name = "S")]
-    pub dt_max: Option<f64>,
-    /// Drift Error window sizes, metres of reference path (comma-separated).
-    #[arg(
-        long,
-        value_name = "M[,M...]",
-        value_delimiter = ',',
-        default_value = "5"
-    )]
-    pub window: Vec<f64>,
-    /// Window overlap as a fraction in [0, 1).
-    #[arg(long, default_value_t = 0.0)]
-    pub overlap: f64,
-    /// Lever-arm correction of path lengths.
-    #[arg(long, value_enum, default_value = "fit")]
-    pub lever_correction: LeverCorrectionArg,
-    /// Expected lever arm a between the two sensors, metres (bound of the paper's correction).
-    #[arg(long, value_name = "M", default_value_t = 0.1)]
-    pub lever_arm: f64,
-    /// Time-offset method applied.
-    #[arg(long, value_enum, default_value = "auto")]
-    pub offset_method: OffsetMethodArg,
-    /// Largest offset searched, seconds (GPS time and UTC alone differ by 18 s).
-    #[arg(long, value_name = "S", default_value_t = 30.0)]
-    pub max_offset: f64,
-    /// Fine grid step of the offset search, seconds.
-    #[arg(long, value_name = "S", default_value_t = 0.001)]
-    pub grid: f64,
-    /// Skip the search and apply this offset, seconds (t_est + offset = reference clock).
-    #[arg(long, value_name = "S", allow_hyphen_values = true)]
-    pub time_offset: Option<f64>,
-    /// Crop start on the reference clock: epoch seconds, or seconds from the first reference sample.
-    #[arg(long, value_name = "S", allow_hyphen_values = true)]
-    pub t_start: Option<f64>,
-    /// Crop end, like --t-start.
-    #[arg(long, value_name = "S", allow_hyphen_values = true)]
-    pub t_end: Option<f64>,
+    #[command(flatten)]
+    pub params: Parameters,
     /// Write the JSON report to FILE (`-` = stdout).
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
@@ -211,10 +117,6 @@ pub struct EvalArgs {
     pub preset: Option<String>,
     #[command(flatten)]
     pub text: TextArgs,
-    /// Flags set on the command line (clap ids), filled by [`crate::cli::parse`]: they win over a
-    /// preset's parameters.
-    #[arg(skip)]
-    pub given: Vec<String>,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -270,9 +172,10 @@ pub struct SimulateArgs {
         long,
         value_name = "X,Y,Z",
         default_value = "0,0.3,0",
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = triple
     )]
-    pub lever: String,
+    pub lever: [f64; 3],
     /// Repeat the route this many times (longer missions).
     #[arg(long, default_value_t = 1)]
     pub laps: usize,
@@ -292,17 +195,6 @@ pub struct SimulateArgs {
     pub clock_drift_ppm: f64,
 }
 
-/// Parses `a,b,c` into three numbers.
-pub fn parse_triple(flag: &str, s: &str) -> Result<[f64; 3], String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("{flag} takes three comma-separated numbers, got `{s}`"))?;
-    <[f64; 3]>::try_from(v)
-        .map_err(|_| format!("{flag} takes three comma-separated numbers, got `{s}`"))
-}
-
 #[derive(Debug, Args)]
 pub struct BatchArgs {
     /// A manifest (.toml), or a folder of recordings (.mcap, also one level down).
@@ -313,6 +205,12 @@ pub struct BatchArgs {
     /// For a folder: estimate topic, optionally named (repeatable).
     #[arg(long, value_name = "[NAME=]TOPIC")]
     pub estimate: Vec<String>,
+    /// For a folder: the topics of a dataset (a built-in preset or a preset file), like `eval --preset`.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub preset: Option<String>,
+    /// Evaluation parameters for every mission, over the manifest's and the preset's.
+    #[command(flatten)]
+    pub params: Parameters,
     /// Output folder: <mission>.json, <mission>.mcap, summary.{json,csv,md}.
     #[arg(long, value_name = "DIR", default_value = "trajdrift-batch")]
     pub out: PathBuf,

@@ -17,21 +17,10 @@ pub const EXIT_USAGE: u8 = 2;
 /// The command finished, but with a warning the user must see (weak offset, truncated recording).
 pub const EXIT_WARNING: u8 = 3;
 
-/// Parses the command line, and records which `eval` flags were given (not defaults), so a preset's
-/// parameters stay under them.
+/// Parses the command line (clap exits with code 2 and its message on a usage error).
 pub fn parse() -> args::Cli {
-    use clap::parser::ValueSource;
-    use clap::{CommandFactory, FromArgMatches};
-    let matches = args::Cli::command().get_matches();
-    let mut cli = args::Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
-    if let (args::Command::Eval(a), Some(("eval", m))) = (&mut cli.command, matches.subcommand()) {
-        a.given = m
-            .ids()
-            .filter(|id| m.value_source(id.as_str()) == Some(ValueSource::CommandLine))
-            .map(|id| id.to_string())
-            .collect();
-    }
-    cli
+    use clap::Parser;
+    args::Cli::parse()
 }
 
 /// Dispatches a parsed command line and maps the outcome to an exit code.
@@ -40,7 +29,7 @@ pub fn run(cli: args::Cli) -> ExitCode {
         args::Command::Eval(a) => commands::eval::run(*a),
         args::Command::Topics(a) => commands::topics::run(a),
         args::Command::Simulate(a) => commands::simulate::run(a),
-        args::Command::Batch(a) => commands::batch::run(a),
+        args::Command::Batch(a) => commands::batch::run(*a),
         args::Command::Merge(a) => commands::merge::run(a),
         args::Command::Export(a) => commands::export::run(a),
     };

@@ -5,7 +5,7 @@ pub mod config;
 pub mod export;
 pub mod extrinsics;
 pub mod inputs;
-pub mod overrides;
+pub mod parameters;
 pub mod preset;
 
 use rayon::prelude::*;

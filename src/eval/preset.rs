@@ -12,8 +12,8 @@ use std::path::Path;
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
-use crate::eval::config::{EvalConfig, NamedInput};
-use crate::eval::overrides::Overrides;
+use crate::eval::config::NamedInput;
+use crate::eval::parameters::Parameters;
 use crate::sources::TopicInfo;
 
 /// The built-in presets: name and TOML text.
@@ -62,7 +62,7 @@ pub struct Preset {
     pub estimates: Vec<EstimateSpec>,
     /// Defaults under the command line's flags.
     #[serde(default)]
-    pub parameters: Overrides,
+    pub parameters: Parameters,
 }
 
 /// The inputs a preset picks in one recording.
@@ -109,11 +109,6 @@ impl Preset {
                     .join(" ")
             ))
         })?;
-        if p.parameters.preset.is_some() {
-            return Err(Error::InvalidArgument(format!(
-                "{origin}: a preset's [parameters] cannot name another preset"
-            )));
-        }
         if p.estimates.is_empty() || p.estimates.iter().any(|e| e.topics.is_empty()) {
             return Err(Error::InvalidArgument(format!(
                 "{origin}: a preset needs at least one [[estimate]], each with topics = [...]"
@@ -250,21 +245,12 @@ impl Preset {
         let topics = crate::sources::open(path)?.topics()?;
         self.select(path, &topics, reference, estimates)
     }
-
-    /// Applies the preset's parameters to `config`, except those in `given` (flags set on the
-    /// command line).
-    pub fn apply_parameters(&self, config: &mut EvalConfig, given: &[String]) -> Result<()> {
-        self.parameters
-            .without(given)
-            .apply(config)
-            .map_err(|e| Error::InvalidArgument(format!("preset {}: [parameters]: {e}", self.name)))
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::eval::config::TrajectoryInput;
+    use crate::eval::config::{EvalConfig, TrajectoryInput};
 
     fn topics(names: &[&str]) -> Vec<TopicInfo> {
         names
@@ -347,9 +333,15 @@ mod tests {
     fn given_flags_win_over_preset_parameters() {
         let mut p = Preset::load("fomo").unwrap();
         p.parameters.window = Some(vec![10.0]);
-        p.parameters.platform = Some("wheeled".into());
+        p.parameters.platform = Some(crate::eval::config::Platform::Wheeled);
+        let flags = Parameters {
+            window: Some(vec![5.0]),
+            ..Parameters::default()
+        };
         let mut c = EvalConfig::new(None, NamedInput::file("r.tum"), vec![]);
-        p.apply_parameters(&mut c, &["window".to_string()]).unwrap();
+        Parameters::layered([&p.parameters, &flags])
+            .apply(&mut c)
+            .unwrap();
         assert_eq!(c.windows_m, vec![5.0]);
         assert_eq!(c.platform, crate::eval::config::Platform::Wheeled);
     }

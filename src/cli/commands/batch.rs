@@ -2,7 +2,7 @@
 
 use anyhow::{anyhow, Result};
 
-use trajdrift::batch::manifest::Manifest;
+use trajdrift::batch::manifest::{FolderRequest, Manifest};
 use trajdrift::batch::run::{run_batch, BatchOptions};
 use trajdrift::batch::shard::Shard;
 
@@ -12,28 +12,35 @@ use crate::cli::batch_progress::BatchBars;
 /// Runs the command; returns the exit code (1 when a mission failed, else 3 when an offset was weak).
 pub fn run(a: BatchArgs) -> Result<u8> {
     let manifest = if a.input.is_dir() {
-        let reference = a.reference.as_deref().ok_or_else(|| {
-            trajdrift::Error::InvalidArgument(format!(
-                "{}: a folder needs --reference TOPIC and --estimate TOPIC",
+        if a.reference.is_none() && a.preset.is_none() {
+            return Err(trajdrift::Error::InvalidArgument(format!(
+                "{}: a folder needs --reference TOPIC and --estimate TOPIC, or --preset NAME",
                 a.input.display()
             ))
-        })?;
-        if a.estimate.is_empty() {
+            .into());
+        }
+        if a.estimate.is_empty() && a.preset.is_none() {
             return Err(trajdrift::Error::InvalidArgument(format!(
                 "{}: a folder needs --estimate TOPIC (repeatable)",
                 a.input.display()
             ))
             .into());
         }
-        Manifest::from_dir(&a.input, reference, &a.estimate)?
+        let request = FolderRequest {
+            reference: a.reference.clone(),
+            estimates: a.estimate.clone(),
+            preset: a.preset.clone(),
+            parameters: a.params.clone(),
+        };
+        Manifest::from_dir(&a.input, &request)?
     } else {
-        if a.reference.is_some() || !a.estimate.is_empty() {
+        if a.reference.is_some() || !a.estimate.is_empty() || a.preset.is_some() {
             return Err(trajdrift::Error::InvalidArgument(
-                "--reference/--estimate are for a folder of recordings; a manifest names them per mission".into(),
+                "--reference/--estimate/--preset are for a folder of recordings; a manifest names them per mission".into(),
             )
             .into());
         }
-        Manifest::from_toml(&a.input)?
+        Manifest::from_toml(&a.input, &a.params)?
     };
     let shard = match a.shard.as_deref() {
         Some(spec) => Some(Shard::resolve(spec, a.shards, &|v| std::env::var(v).ok())?),

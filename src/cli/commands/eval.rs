@@ -2,19 +2,14 @@
 
 use anyhow::{anyhow, Result};
 
-use trajdrift::align::time_offset::OffsetMethod;
 use trajdrift::annotate::annotate;
-use trajdrift::eval::config::{EvalConfig, LeverSpec, NamedInput, Platform};
+use trajdrift::eval::config::{EvalConfig, LeverSpec, NamedInput};
 use trajdrift::eval::evaluate_with_inputs;
+use trajdrift::eval::parameters::Parameters;
 use trajdrift::eval::preset::Preset;
-use trajdrift::metrics::lever::LeverCorrection;
 use trajdrift::report::{output::write_output, table};
-use trajdrift::sources::StampSource;
 
-use crate::cli::args::{
-    parse_triple, text_options, EvalArgs, LeverCorrectionArg, OffsetMethodArg, PlatformArg,
-    StampArg,
-};
+use crate::cli::args::{text_options, EvalArgs};
 use crate::cli::progress::ReadProgress;
 use crate::cli::{EXIT_OK, EXIT_WARNING};
 
@@ -51,48 +46,6 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
         ),
     };
     let mut c = EvalConfig::new(a.recording.clone(), reference, estimates);
-    c.stamp = match a.stamp {
-        StampArg::Header => StampSource::Header,
-        StampArg::Log => StampSource::Log,
-    };
-    c.origin = a
-        .origin
-        .as_deref()
-        .map(|s| parse_triple("--origin", s))
-        .transpose()
-        .map_err(|e| anyhow!(e))?;
-    c.platform = match a.platform {
-        PlatformArg::Legged => Platform::Legged,
-        PlatformArg::Wheeled => Platform::Wheeled,
-        PlatformArg::Auto => Platform::Auto,
-    };
-    c.eps_min_m = a.eps_min;
-    c.curvature_eps_m = a.curvature_eps;
-    c.path_eps_m = a.path_eps;
-    c.theta_max_rad = a.theta_max;
-    if let Some(v) = a.dt_max {
-        c.dt_max_s = v;
-        c.curvature_dt_max_s = Some(v);
-    }
-    c.windows_m = a.window.clone();
-    c.overlap = a.overlap;
-    c.lever_correction = match a.lever_correction {
-        LeverCorrectionArg::Paper => LeverCorrection::Paper,
-        LeverCorrectionArg::None => LeverCorrection::None,
-        LeverCorrectionArg::Fit => LeverCorrection::Fit,
-    };
-    c.lever_arm_m = a.lever_arm;
-    c.offset_method = match a.offset_method {
-        OffsetMethodArg::Curvature => OffsetMethod::Curvature,
-        OffsetMethodArg::Speed => OffsetMethod::Speed,
-        OffsetMethodArg::SignedCurvature => OffsetMethod::SignedCurvature,
-        OffsetMethodArg::Auto => OffsetMethod::Auto,
-    };
-    c.max_offset_s = a.max_offset;
-    c.grid_s = a.grid;
-    c.time_offset_s = a.time_offset;
-    c.t_start = a.t_start;
-    c.t_end = a.t_end;
     c.export_aligned = a.export_aligned.clone();
     c.text = text_options(&a.text)?;
     c.reference_lever = a
@@ -112,9 +65,8 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
             LeverSpec::parse("--estimate-lever", l).map(|l| (name, l))
         })
         .collect::<trajdrift::Result<_>>()?;
-    if let Some(p) = &preset {
-        p.apply_parameters(&mut c, &a.given)?;
-    }
+    let preset_parameters = preset.map(|p| p.parameters).unwrap_or_default();
+    Parameters::layered([&preset_parameters, &a.params]).apply(&mut c)?;
     Ok((c, notes))
 }
 

@@ -8,9 +8,9 @@ use trajdrift::sources::mapped_csv::write_csv;
 use trajdrift::sources::open::is_recording;
 use trajdrift::sources::text::TextSource;
 use trajdrift::sources::tum::write_tum;
-use trajdrift::sources::{ExtractOptions, Source, StampSource};
+use trajdrift::sources::{ExtractOptions, Source};
 
-use crate::cli::args::{text_options, ExportArgs, ExportFormatArg, StampArg};
+use crate::cli::args::{text_options, ExportArgs, ExportFormatArg};
 use crate::cli::EXIT_OK;
 
 /// Runs the command; returns the exit code.
@@ -29,10 +29,7 @@ pub fn run(a: ExportArgs) -> Result<u8> {
         (Box::new(s), topic)
     };
     let options = ExtractOptions {
-        stamp: match a.stamp {
-            StampArg::Header => StampSource::Header,
-            StampArg::Log => StampSource::Log,
-        },
+        stamp: a.stamp,
         origin: None,
         ..ExtractOptions::default()
     };

@@ -7,7 +7,7 @@ use trajdrift::report::output::write_output;
 use trajdrift::simulate::writer::{truth_json, write_mcap};
 use trajdrift::simulate::{default_route, simulate, MissionConfig};
 
-use crate::cli::args::{parse_triple, SimulateArgs};
+use crate::cli::args::SimulateArgs;
 use crate::cli::EXIT_OK;
 
 /// Runs the command; returns the exit code.
@@ -22,7 +22,7 @@ pub fn run(a: SimulateArgs) -> Result<u8> {
         seed: a.seed,
         time_offset_s: a.time_offset,
         scale_error: a.scale_error,
-        est_lever_m: parse_triple("--lever", &a.lever).map_err(|e| anyhow!(e))?,
+        est_lever_m: a.lever,
         clock_drift_ppm: a.clock_drift_ppm,
         ..MissionConfig::default()
     };
