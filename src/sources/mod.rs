@@ -8,6 +8,7 @@ pub mod bag;
 pub mod extract;
 pub mod mcap;
 pub mod open;
+pub mod recording;
 pub mod rosbag2;
 pub mod tum;
 
