@@ -112,7 +112,7 @@ impl Manifest {
                 Some(spec) => {
                     let p = Preset::load_from(spec, base).map_err(in_mission)?;
                     let s = p
-                        .select_in(Some(&recording), reference, estimates)
+                        .select_in(std::slice::from_ref(&recording), reference, estimates)
                         .map_err(in_mission)?;
                     let mut c = EvalConfig::new(Some(recording), s.reference, s.estimates);
                     p.apply_parameters(&mut c, &[]).map_err(in_mission)?;

@@ -36,8 +36,10 @@ pub enum ExportFormatArg {
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
-    /// The recording (MCAP, ROS 1 bag, rosbag2 folder), or a text trajectory file.
-    pub recording: PathBuf,
+    /// The recording (MCAP, ROS 1 bag, rosbag2 folder), several files of one mission or a mission
+    /// folder, or a text trajectory file.
+    #[arg(required = true, num_args = 1..)]
+    pub recording: Vec<PathBuf>,
     /// The topic to write (not needed for a text file).
     #[arg(long, value_name = "TOPIC")]
     pub topic: Option<String>,
@@ -95,8 +97,9 @@ pub enum LeverCorrectionArg {
 #[derive(Debug, Args)]
 #[command(allow_negative_numbers = true)]
 pub struct EvalArgs {
-    /// The recording (.mcap). Optional when both sides are text files.
-    pub recording: Option<PathBuf>,
+    /// The recording (MCAP, ROS 1 bag, rosbag2 folder), or several files of one mission (e.g. a
+    /// GrandTour mission's bags), or a mission folder. Optional when both sides are text files.
+    pub recording: Vec<PathBuf>,
     /// Reference topic.
     #[arg(long, value_name = "TOPIC", required_unless_present_any = ["reference_file", "preset"])]
     pub reference: Option<String>,
@@ -241,8 +244,10 @@ pub struct TextArgs {
 
 #[derive(Debug, Args)]
 pub struct TopicsArgs {
-    /// The recording (.mcap).
-    pub recording: PathBuf,
+    /// The recording (MCAP, ROS 1 bag, rosbag2 folder), several files of one mission, or a mission
+    /// folder.
+    #[arg(required = true, num_args = 1..)]
+    pub recording: Vec<PathBuf>,
     /// Write the list as JSON to FILE (`-` = stdout).
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,

@@ -93,3 +93,30 @@ pub trait Recording {
         }
     }
 }
+
+/// A boxed recording (what [`crate::sources::open::open_recording`] returns) is a recording.
+impl<R: Recording + ?Sized> Recording for Box<R> {
+    fn path(&self) -> &Path {
+        (**self).path()
+    }
+    fn recording_size(&self) -> u64 {
+        (**self).recording_size()
+    }
+    fn channel_counts(&self) -> Result<(Vec<ChannelInfo>, HashMap<u16, u64>)> {
+        (**self).channel_counts()
+    }
+    fn known_channels(&self) -> Option<Vec<ChannelInfo>> {
+        (**self).known_channels()
+    }
+    fn pass(
+        &self,
+        select: Select<'_>,
+        progress: Progress<'_>,
+        on_message: OnMessage<'_>,
+    ) -> Result<StreamOutcome> {
+        (**self).pass(select, progress, on_message)
+    }
+    fn truncation_warning(&self, offset: u64) -> Warning {
+        (**self).truncation_warning(offset)
+    }
+}
