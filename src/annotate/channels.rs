@@ -369,11 +369,13 @@ impl<W: Write + Seek> Annotations<W> for Annotator {
             .map_err(|e| self.err(e))?;
             self.aligned_added[i] = true;
         }
-        let patched = shift_stamp(&channel.message_encoding, data, dt_ns).map_err(|detail| Error::Decode {
-            path: self.output.clone(),
-            topic: channel.topic.clone(),
-            index: u64::from(header.sequence),
-            detail,
+        let patched = shift_stamp(&channel.message_encoding, data, dt_ns).map_err(|detail| {
+            Error::Decode {
+                path: self.output.clone(),
+                topic: channel.topic.clone(),
+                index: u64::from(header.sequence),
+                detail,
+            }
         })?;
         let shift = |t: u64| -> Result<u64> {
             t.checked_add_signed(dt_ns).ok_or_else(|| Error::Output {
@@ -411,7 +413,11 @@ impl<W: Write + Seek> Annotations<W> for Annotator {
 }
 
 /// Shifts the header stamp of a stamped message by `dt_ns` in its own encoding: `cdr` (ROS 2) or `ros1`.
-pub fn shift_stamp(encoding: &str, data: &[u8], dt_ns: i64) -> std::result::Result<Vec<u8>, String> {
+pub fn shift_stamp(
+    encoding: &str,
+    data: &[u8],
+    dt_ns: i64,
+) -> std::result::Result<Vec<u8>, String> {
     match encoding {
         "cdr" => shift_header_stamp(data, dt_ns),
         "ros1" => shift_ros1_header_stamp(data, dt_ns),

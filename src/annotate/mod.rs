@@ -128,19 +128,23 @@ pub fn annotate(
     let plan = plan(config, report, inputs);
     let mcap_input = single_mcap(&recordings);
     let recording = match (mcap_input, recordings.is_empty()) {
-        (None, false) => Some(crate::sources::open::open_recording(&recordings[0]).and_then(
-            |first| match recordings.len() {
-                1 => Ok(first),
-                _ => {
-                    let mut parts = vec![first];
-                    for p in &recordings[1..] {
-                        parts.push(crate::sources::open::open_recording(p)?);
+        (None, false) => Some(
+            crate::sources::open::open_recording(&recordings[0]).and_then(
+                |first| match recordings.len() {
+                    1 => Ok(first),
+                    _ => {
+                        let mut parts = vec![first];
+                        for p in &recordings[1..] {
+                            parts.push(crate::sources::open::open_recording(p)?);
+                        }
+                        Ok(Box::new(crate::sources::mission::Mission::new(
+                            &recordings[0],
+                            parts,
+                        )?) as crate::sources::mission::Part)
                     }
-                    Ok(Box::new(crate::sources::mission::Mission::new(&recordings[0], parts)?)
-                        as crate::sources::mission::Part)
-                }
-            },
-        )?),
+                },
+            )?,
+        ),
         _ => None,
     };
     let (info, profile) = match (mcap_input, &recording) {
@@ -165,7 +169,9 @@ pub fn annotate(
     let copy = write_atomically(out, |file| match mcap_input {
         Some(path) => copy_with(path, file, out, options, &mut annotator, progress),
         None => any_input::copy_recording(
-            recording.as_deref().map(|r| r as &dyn crate::sources::recording::Recording),
+            recording
+                .as_deref()
+                .map(|r| r as &dyn crate::sources::recording::Recording),
             file,
             out,
             options,

@@ -37,8 +37,8 @@ pub enum ExportFormatArg {
 #[derive(Debug, Args)]
 pub struct ExportArgs {
     /// The recording (MCAP, ROS 1 bag, rosbag2 folder), several files of one mission or a mission
-    /// folder, or a text trajectory file.
-    #[arg(required = true, num_args = 1..)]
+    /// folder, or a text trajectory file; then OUT, the output file (`-` = stdout).
+    #[arg(required = true, num_args = 1.., value_name = "RECORDING... OUT")]
     pub recording: Vec<PathBuf>,
     /// The topic to write (not needed for a text file).
     #[arg(long, value_name = "TOPIC")]
@@ -46,7 +46,9 @@ pub struct ExportArgs {
     /// Output format.
     #[arg(long, value_enum, default_value = "tum")]
     pub format: ExportFormatArg,
-    /// Output file (`-` = stdout).
+    /// Output file (`-` = stdout): the last positional argument, taken from `recording` by the
+    /// command (clap cannot end a list of positionals with another one).
+    #[arg(skip)]
     pub out: PathBuf,
     /// Which stamp to use.
     #[arg(long, value_enum, default_value = "header")]
@@ -295,6 +297,14 @@ pub struct SimulateArgs {
         allow_hyphen_values = true
     )]
     pub clock_drift_ppm: f64,
+    /// Write a GrandTour-like mission instead: OUT is a folder of per-sensor ROS 1 bags
+    /// (`<stamp>_cpt7_ie_tc.bag`, `_ap20_prism_position.bag`, `_dlio.bag`, `_anymal_state.bag`,
+    /// `_tf_minimal.bag`) with GrandTour's topic names and frames.
+    #[arg(long)]
+    pub grandtour: bool,
+    /// With --grandtour: the same messages in one `<stamp>_merged.bag`.
+    #[arg(long, requires = "grandtour")]
+    pub merged: bool,
 }
 
 /// Parses `a,b,c` into three numbers.

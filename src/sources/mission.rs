@@ -108,15 +108,17 @@ impl Mission {
         let (other_type, other_part) = other
             .map(|o| (o.schema_name.as_str(), channels.first_part[o.id as usize]))
             .unwrap_or(("?", part));
-        Error::InvalidArgument(format!(
-            "{}: topic {} has type {} in {} but {} in {}; a topic must have one type across a mission's files (pass only the files that agree)",
-            self.path.display(),
+        Error::Mission {
+            path: self.path.clone(),
+            detail: format!(
+            "topic {} has type {} in {} but {} in {}; a topic must have one type across a mission's files (pass only the files that agree)",
             c.topic,
             other_type,
             self.parts[other_part].path().display(),
             c.schema_name,
             self.parts[part].path().display(),
-        ))
+        ),
+        }
     }
 }
 
@@ -148,6 +150,10 @@ impl Recording for Mission {
             for c in &p.known_channels()? {
                 channels.global(i, c).ok()?;
             }
+        }
+        // A topic with two types is reported by the pass, which names both files.
+        if channels.list.iter().any(|c| channels.conflict(c).is_some()) {
+            return None;
         }
         Some(channels.list)
     }

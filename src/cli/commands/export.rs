@@ -14,9 +14,16 @@ use crate::cli::args::{text_options, ExportArgs, ExportFormatArg, StampArg};
 use crate::cli::EXIT_OK;
 
 /// Runs the command; returns the exit code.
-pub fn run(a: ExportArgs) -> Result<u8> {
+pub fn run(mut a: ExportArgs) -> Result<u8> {
+    if a.recording.len() < 2 {
+        return Err(anyhow!(trajdrift::Error::InvalidArgument(
+            "give the RECORDING (or text file) and then OUT (`-` = stdout)".into()
+        )));
+    }
+    a.out = a.recording.pop().unwrap_or_default();
     let first = &a.recording[0];
-    let (source, topic): (Box<dyn Source>, String) = if a.recording.len() > 1 || is_recording(first) {
+    let (source, topic): (Box<dyn Source>, String) = if a.recording.len() > 1 || is_recording(first)
+    {
         let topic = a.topic.clone().ok_or_else(|| {
             anyhow!(trajdrift::Error::InvalidArgument(format!(
                 "{}: give --topic TOPIC (see `trajdrift topics`)",

@@ -27,8 +27,8 @@ pub struct BagWriter<W: Write + Seek> {
     out: W,
     compression: BagCompression,
     chunk_target: usize,
-    /// Connection id → (topic, type, md5sum, definition).
-    connections: Vec<(String, String)>,
+    /// Connection id → (topic, type, message definition).
+    connections: Vec<(String, String, String)>,
     /// Connections whose record is already in some chunk... and in the current one.
     in_chunk: Vec<bool>,
     chunk: Vec<u8>,
@@ -103,20 +103,32 @@ impl<W: Write + Seek> BagWriter<W> {
         self.out.write_all(&rec)
     }
 
-    /// Adds a connection; returns its id.
+    /// Adds a connection without a message definition; returns its id.
     pub fn add_connection(&mut self, topic: &str, type_name: &str) -> u32 {
-        self.connections.push((topic.into(), type_name.into()));
+        self.add_connection_with_definition(topic, type_name, "")
+    }
+
+    /// Adds a connection with its `message_definition` (the `gendeps --cat` text readers such as
+    /// `mcap-ros1-support` decode with); returns its id.
+    pub fn add_connection_with_definition(
+        &mut self,
+        topic: &str,
+        type_name: &str,
+        definition: &str,
+    ) -> u32 {
+        self.connections
+            .push((topic.into(), type_name.into(), definition.into()));
         self.in_chunk.push(false);
         (self.connections.len() - 1) as u32
     }
 
     fn connection_record(&self, out: &mut Vec<u8>, conn: u32) {
-        let (topic, ty) = &self.connections[conn as usize];
+        let (topic, ty, definition) = &self.connections[conn as usize];
         let data = [
             field("topic", topic.as_bytes()),
             field("type", ty.as_bytes()),
             field("md5sum", b"*"),
-            field("message_definition", b""),
+            field("message_definition", definition.as_bytes()),
         ]
         .concat();
         record(
