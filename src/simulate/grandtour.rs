@@ -28,7 +28,7 @@ use crate::decode::ros2_msgs::{
     Header, Odometry, Point, PointStamped, Quaternion, TFMessage, Time, Transform, TransformStamped,
 };
 use crate::error::{Error, Result};
-use crate::simulate::ros1_definitions::definition;
+use crate::simulate::ros1_definitions::{definition, md5sum};
 use crate::simulate::Mission;
 use crate::sources::bag::writer::{BagCompression, BagWriter};
 
@@ -321,7 +321,7 @@ fn write_bag_to<W: Write + Seek>(
         if let Some(&(_, c)) = conns.iter().find(|(t, _)| *t == topic) {
             return c;
         }
-        let c = w.add_connection_with_definition(topic, ty, &definition(ty));
+        let c = w.add_connection_with_definition(topic, ty, &definition(ty), md5sum(ty));
         conns.push((topic, c));
         c
     };

@@ -59,3 +59,15 @@ pub fn definition(type_name: &str) -> String {
         _ => String::new(),
     }
 }
+
+/// The MD5 sum ROS 1 computes for `type_name` (what `rosmsg md5` prints), for the types the simulator
+/// writes; `*` (any) for others.
+pub fn md5sum(type_name: &str) -> &'static str {
+    match type_name {
+        "geometry_msgs/PointStamped" => "c63aecb41bfdfd6b7e1fac37c7cbe7bf",
+        "nav_msgs/Odometry" => "cd5e73d190d741a2f92e81eda573aca7",
+        "tf2_msgs/TFMessage" => "94810edda583a504dfda3829e70d7eec",
+        "sensor_msgs/PointCloud2" => "1158d486dd51d683ce2f1be655c3c181",
+        _ => "*",
+    }
+}
