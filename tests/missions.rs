@@ -254,3 +254,39 @@ fn one_topic_with_two_types_in_two_files_is_a_clear_error() {
         "{err}"
     );
 }
+
+#[test]
+fn batch_takes_mission_folders_bags_and_rosbag2_folders() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, merged) = mission(dir.path());
+    let missions = dir.path().join("missions");
+    std::fs::create_dir(&missions).unwrap();
+    std::fs::rename(dir.path().join("split"), missions.join("gt")).unwrap();
+    std::fs::rename(&merged, missions.join("merged.bag")).unwrap();
+    let out = dir.path().join("out");
+    let o = run(&[
+        "batch",
+        s(&missions),
+        "--reference",
+        "/boxi/ap20/prism_position",
+        "--estimate",
+        "/boxi/dlio/lidar_map_odometry",
+        "--out",
+        s(&out),
+    ]);
+    assert!(
+        matches!(o.status.code(), Some(0 | 3)),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let load = |n: &str| -> Value {
+        serde_json::from_slice(&std::fs::read(out.join(format!("{n}.json"))).unwrap()).unwrap()
+    };
+    let (gt, one) = (load("gt"), load("merged"));
+    assert_eq!(gt["status"], "ok", "{gt}");
+    assert!(gt["report"]["estimates"][0]["drift_error"][0]["rmse"].is_number());
+    assert_eq!(
+        gt["report"]["estimates"], one["report"]["estimates"],
+        "the mission folder and the merged bag differ"
+    );
+}
