@@ -290,3 +290,47 @@ fn batch_takes_mission_folders_bags_and_rosbag2_folders() {
         "the mission folder and the merged bag differ"
     );
 }
+
+#[test]
+fn a_topic_split_over_two_files_is_merged_by_stamp() {
+    use trajdrift::decode::ros1;
+    use trajdrift::decode::ros2_msgs::{Header, PointStamped, Time};
+    use trajdrift::sources::bag::writer::{BagCompression, BagWriter};
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, keep: &dyn Fn(u32) -> bool| {
+        let path = dir.path().join(name);
+        let f = std::fs::File::create(&path).unwrap();
+        let mut w = BagWriter::new(f, BagCompression::None, 1 << 12).unwrap();
+        let c = w.add_connection("/p", "geometry_msgs/PointStamped");
+        for i in (0..200u32).filter(|&i| keep(i)) {
+            let t = 1_700_000_000_000_000_000 + u64::from(i) * 50_000_000;
+            let mut m = PointStamped {
+                header: Header {
+                    stamp: Time::from_ns(t as i64),
+                    frame_id: "map".into(),
+                },
+                ..Default::default()
+            };
+            m.point.x = f64::from(i);
+            m.point.y = f64::from(i).sin();
+            w.write(c, t, &ros1::encode_point_stamped(i, &m)).unwrap();
+        }
+        w.finish().unwrap();
+        path
+    };
+    let odd = write("odd.bag", &|i| i % 2 == 1);
+    let even = write("even.bag", &|i| i % 2 == 0);
+    let all = write("all.bag", &|_| true);
+    let export = |inputs: &[&Path], out: &str| {
+        let out = dir.path().join(out);
+        let mut args = vec!["export"];
+        args.extend(inputs.iter().map(|p| s(p)));
+        args.extend(["--topic", "/p", s(&out)]);
+        let o = run(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read_to_string(out).unwrap()
+    };
+    let merged = export(&[&odd, &even], "merged.tum");
+    assert_eq!(merged.lines().count(), 200);
+    assert_eq!(merged, export(&[&all], "all.tum"));
+}

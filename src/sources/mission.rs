@@ -67,11 +67,13 @@ impl Channels {
         Ok(id)
     }
 
-    /// Another channel of the same topic with another type, if any.
+    /// Another channel of the same topic with another type, if any. ROS 1 and ROS 2 spellings of
+    /// one type (`nav_msgs/Odometry`, `nav_msgs/msg/Odometry`) are the same type.
     fn conflict(&self, c: &ChannelInfo) -> Option<&ChannelInfo> {
+        let name = |c: &ChannelInfo| c.schema_name.replace("/msg/", "/");
         self.list
             .iter()
-            .find(|o| o.topic == c.topic && o.id != c.id && o.schema_name != c.schema_name)
+            .find(|o| o.topic == c.topic && o.id != c.id && name(o) != name(c))
     }
 }
 
