@@ -8,6 +8,7 @@
 //! one output, in the order its files are read (MCAP readers order by log time through the index).
 //! Memory follows the largest message and the writer's chunk, not the input.
 
+use std::collections::hash_map::Entry;
 use std::collections::{BTreeMap, HashMap};
 use std::io::{Seek, Write};
 use std::path::Path;
@@ -56,27 +57,26 @@ pub fn copy_recording<W: Write + Seek, A: Annotations<W>>(
         let mut channels: HashMap<u16, InputChannel> = HashMap::new();
         let mut sequences: HashMap<u16, u32> = HashMap::new();
         let o = rec.pass(&mut |_| true, progress, &mut |c, m| {
-            if !channels.contains_key(&c.id) {
-                let schema_id = schema_for(&mut w, &mut schemas, c).map_err(write_err)?;
-                w.add_channel_with_id(
-                    c.id,
-                    schema_id,
-                    &c.topic,
-                    &c.message_encoding,
-                    &BTreeMap::new(),
-                )
-                .map_err(write_err)?;
-                channels.insert(
-                    c.id,
-                    InputChannel {
+            let channel = match channels.entry(c.id) {
+                Entry::Occupied(e) => e.into_mut(),
+                Entry::Vacant(e) => {
+                    let schema_id = schema_for(&mut w, &mut schemas, c).map_err(write_err)?;
+                    w.add_channel_with_id(
+                        c.id,
+                        schema_id,
+                        &c.topic,
+                        &c.message_encoding,
+                        &BTreeMap::new(),
+                    )
+                    .map_err(write_err)?;
+                    e.insert(InputChannel {
                         id: c.id,
                         schema_id,
                         topic: c.topic.clone(),
                         message_encoding: c.message_encoding.clone(),
-                    },
-                );
-            }
-            let channel = &channels[&c.id];
+                    })
+                }
+            };
             // Formats without sequence numbers (ROS 1 bags, rosbag2) get them counted per channel.
             let seq = sequences.entry(c.id).or_insert(0);
             *seq = seq.wrapping_add(1);
