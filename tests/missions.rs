@@ -334,3 +334,45 @@ fn a_topic_split_over_two_files_is_merged_by_stamp() {
     assert_eq!(merged.lines().count(), 200);
     assert_eq!(merged, export(&[&all], "all.tum"));
 }
+
+#[test]
+fn annotate_from_text_trajectories_writes_the_trajdrift_channels() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, _) = mission(dir.path());
+    let split = dir.path().join("split");
+    let tum = |topic: &str, name: &str| {
+        let out = dir.path().join(name);
+        let o = run(&["export", s(&split), "--topic", topic, s(&out)]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        out
+    };
+    let reference = tum("/boxi/ap20/prism_position", "prism.tum");
+    let estimate = tum("/boxi/dlio/lidar_map_odometry", "dlio.tum");
+    let out = dir.path().join("text.mcap");
+    let o = run(&[
+        "eval",
+        "--quiet",
+        "--reference-file",
+        s(&reference),
+        "--estimate-file",
+        &format!("dlio={}", s(&estimate)),
+        "--annotate",
+        s(&out),
+    ]);
+    assert!(
+        matches!(o.status.code(), Some(0 | 3)),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let topics = trajdrift::sources::open(&out).unwrap().topics().unwrap();
+    let aligned = topics
+        .iter()
+        .find(|t| t.topic == "/trajdrift/dlio/aligned")
+        .expect("aligned channel");
+    assert_eq!(aligned.type_name, "geometry_msgs/msg/PoseStamped");
+    assert_eq!(
+        aligned.message_count,
+        std::fs::read_to_string(&estimate).unwrap().lines().count() as u64
+    );
+    assert!(topics.iter().all(|t| t.topic.starts_with("/trajdrift/")));
+}
