@@ -1,6 +1,9 @@
 //! Memory benchmark for ROS 1 bags: peak RSS of `trajdrift eval` on a small and a large bag (same
 //! mission, the bulk an unrelated 10 Hz channel standing for camera images). Peak memory must not
-//! grow with the bag: the large one may use at most a few MiB more than the small one.
+//! grow with the bag: the large one may use at most a few MiB more than the small one. Then the same
+//! for a GrandTour-like mission of 3 bags (prism, DLIO, state estimator; each with a bulk point-cloud
+//! channel) of the large size in total, evaluated as one mission from its folder: it may use at most
+//! a few MiB more than the single large bag (each file is streamed once, one after the other).
 //!
 //! `cargo bench --bench bag_memory` (large size with `TRAJDRIFT_BENCH_MIB`, default 1100 MiB; the
 //! bags are written to `target/bench-data/` once and reused; chunks uncompressed, 768 KiB as
@@ -96,17 +99,16 @@ fn write_bag(path: &Path, mission: &Mission, bulk_bytes: usize) {
 /// Runs eval on `path`; returns (peak RSS bytes, seconds). Each run is measured in its own child
 /// so RUSAGE_CHILDREN's maximum is that run's (the larger bag runs last).
 fn eval(path: &Path, dir: &Path) -> (u64, f64) {
+    eval_topics(path, dir, "/reference/position", "/estimate/odom")
+}
+
+/// [`eval`] with the reference and estimate topics given.
+fn eval_topics(path: &Path, dir: &Path, reference: &str, estimate: &str) -> (u64, f64) {
     let start = Instant::now();
     let status = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
         .args(["eval", "--quiet", "--platform", "wheeled"])
         .arg(path)
-        .args([
-            "--reference",
-            "/reference/position",
-            "--estimate",
-            "/estimate/odom",
-            "--json",
-        ])
+        .args(["--reference", reference, "--estimate", estimate, "--json"])
         .arg(dir.join("bag-report.json"))
         .status()
         .expect("run trajdrift eval");
@@ -156,4 +158,46 @@ fn main() {
         growth / 1048576.0
     );
     assert!(growth < 8.0 * 1048576.0, "peak memory grows with the bag");
+    let (size, peak, secs) = grandtour_mission(&dir, &mission, mib);
+    println!(
+        "bag memory: 3-bag mission {:.1} MiB, peak RSS {:.1} MiB, {:.2} s, {:.0} MiB/s; vs the single {mib} MiB bag {:+.1} MiB",
+        size as f64 / 1048576.0,
+        peak as f64 / 1048576.0,
+        secs,
+        size as f64 / 1048576.0 / secs,
+        (peak as f64 - peaks[1] as f64) / 1048576.0
+    );
+    assert!(
+        (peak as f64) < peaks[1] as f64 + 8.0 * 1048576.0,
+        "a mission of 3 bags needs more memory than one bag of the same size"
+    );
+}
+
+/// Writes (once) and evaluates a GrandTour-like mission of 3 bags, `mib` MiB in all; returns its
+/// size, peak RSS and seconds.
+fn grandtour_mission(dir: &Path, mission: &Mission, mib: u64) -> (u64, u64, f64) {
+    use trajdrift::simulate::grandtour::{
+        write_grandtour, GrandTourBag, GrandTourOptions, DLIO_TOPIC, PRISM_TOPIC,
+    };
+    let folder = dir.join(format!("grandtour-3bags-{mib}mib"));
+    if !folder.exists() {
+        let bags = vec![
+            GrandTourBag::Prism,
+            GrandTourBag::Dlio,
+            GrandTourBag::StateEstimator,
+        ];
+        let per_message = mib as f64 * 1048576.0 / (mission.duration_s * 10.0 * bags.len() as f64);
+        let tmp = dir.join(format!("grandtour-3bags-{mib}mib.tmp"));
+        let _ = std::fs::remove_dir_all(&tmp);
+        let options = GrandTourOptions {
+            bags,
+            bulk_bytes: per_message as usize,
+            merged: false,
+        };
+        write_grandtour(&tmp, mission, &options).expect("write the mission");
+        std::fs::rename(&tmp, &folder).expect("rename the mission");
+    }
+    let size = trajdrift::sources::open::input_size(&folder);
+    let (peak, secs) = eval_topics(&folder, dir, PRISM_TOPIC, DLIO_TOPIC);
+    (size, peak, secs)
 }

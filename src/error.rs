@@ -127,6 +127,10 @@ pub enum Error {
         detail: String,
         hint: String,
     },
+
+    /// The recordings of a mission (several files, or a mission folder) do not fit together.
+    #[error("{path}: {detail}")]
+    Mission { path: PathBuf, detail: String },
 }
 
 impl Error {

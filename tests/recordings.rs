@@ -198,7 +198,7 @@ fn ros1_in_mcap_reads_like_the_bag() {
     let path = dir.path().join("ros1.mcap");
     {
         use trajdrift::sources::bag::BagSource;
-        use trajdrift::sources::extract::Recording;
+        use trajdrift::sources::recording::Recording;
         let source = BagSource::open(&bag).unwrap();
         let f = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
         let mut w = mcap::WriteOptions::new().profile("ros1").create(f).unwrap();

@@ -369,11 +369,13 @@ impl<W: Write + Seek> Annotations<W> for Annotator {
             .map_err(|e| self.err(e))?;
             self.aligned_added[i] = true;
         }
-        let patched = shift_header_stamp(data, dt_ns).map_err(|detail| Error::Decode {
-            path: self.output.clone(),
-            topic: channel.topic.clone(),
-            index: u64::from(header.sequence),
-            detail,
+        let patched = shift_stamp(&channel.message_encoding, data, dt_ns).map_err(|detail| {
+            Error::Decode {
+                path: self.output.clone(),
+                topic: channel.topic.clone(),
+                index: u64::from(header.sequence),
+                detail,
+            }
         })?;
         let shift = |t: u64| -> Result<u64> {
             t.checked_add_signed(dt_ns).ok_or_else(|| Error::Output {
@@ -408,6 +410,41 @@ impl<W: Write + Seek> Annotations<W> for Annotator {
         .map_err(|e| self.err(e))?;
         Ok(())
     }
+}
+
+/// Shifts the header stamp of a stamped message by `dt_ns` in its own encoding: `cdr` (ROS 2) or `ros1`.
+pub fn shift_stamp(
+    encoding: &str,
+    data: &[u8],
+    dt_ns: i64,
+) -> std::result::Result<Vec<u8>, String> {
+    match encoding {
+        "cdr" => shift_header_stamp(data, dt_ns),
+        "ros1" => shift_ros1_header_stamp(data, dt_ns),
+        other => Err(format!(
+            "message encoding `{other}`: trajdrift patches stamps of `cdr` and `ros1` messages only"
+        )),
+    }
+}
+
+/// Shifts the header stamp of a ROS 1 stamped message by `dt_ns`, in a copy: a ROS 1 `std_msgs/Header`
+/// starts with `uint32 seq, uint32 secs, uint32 nsecs`, little endian, with no encapsulation header.
+pub fn shift_ros1_header_stamp(data: &[u8], dt_ns: i64) -> std::result::Result<Vec<u8>, String> {
+    if data.len() < 12 {
+        return Err(format!(
+            "{} bytes, too short for a stamped ROS 1 message",
+            data.len()
+        ));
+    }
+    let word = |at: usize| u32::from_le_bytes([data[at], data[at + 1], data[at + 2], data[at + 3]]);
+    let stamp = i64::from(word(4)) * 1_000_000_000 + i64::from(word(8)) + dt_ns;
+    let secs = u32::try_from(stamp.div_euclid(1_000_000_000))
+        .map_err(|_| format!("stamp {stamp} ns shifted out of the uint32 seconds range"))?;
+    let nsecs = stamp.rem_euclid(1_000_000_000) as u32;
+    let mut out = data.to_vec();
+    out[4..8].copy_from_slice(&secs.to_le_bytes());
+    out[8..12].copy_from_slice(&nsecs.to_le_bytes());
+    Ok(out)
 }
 
 /// Shifts the header stamp of a CDR-encoded stamped ROS 2 message by `dt_ns`, in place of a copy:
@@ -490,6 +527,23 @@ mod tests {
             prop_assert!(n2 < 1_000_000_000);
             prop_assert_eq!(s2 as i64 * 1_000_000_000 + n2 as i64, sec as i64 * 1_000_000_000 + ns as i64 + dt);
         }
+    }
+
+    #[test]
+    fn ros1_shift_carries_into_seconds() {
+        let mut data = vec![7, 0, 0, 0];
+        data.extend_from_slice(&10u32.to_le_bytes());
+        data.extend_from_slice(&900_000_000u32.to_le_bytes());
+        data.extend_from_slice(&[0, 0, 0, 0, 42]);
+        let out = shift_stamp("ros1", &data, 200_000_001).unwrap();
+        assert_eq!(&out[..4], &data[..4]);
+        assert_eq!(out[4..8], 11u32.to_le_bytes());
+        assert_eq!(out[8..12], 100_000_001u32.to_le_bytes());
+        assert_eq!(&out[12..], &data[12..]);
+        let back = shift_stamp("ros1", &out, -200_000_001).unwrap();
+        assert_eq!(back, data);
+        assert!(shift_stamp("ros1", &data, -11_000_000_000).is_err());
+        assert!(shift_stamp("json", &data, 1).is_err());
     }
 
     #[test]

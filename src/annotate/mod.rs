@@ -6,6 +6,7 @@
 //! [`metadata`] the `trajdrift` metadata record and report attachment, [`input_info`] the ids and
 //! compression read from the input's summary. The output is written beside OUT and renamed when complete.
 
+pub mod any_input;
 pub mod channels;
 pub mod copy;
 pub mod input_info;
@@ -65,7 +66,54 @@ pub fn check_output(input: &Path, out: &Path, force: bool) -> Result<()> {
     Ok(())
 }
 
-/// Writes the annotated copy of the evaluated recording to `out`. `report` and `inputs` come from
+/// Checks before the evaluation runs that `--annotate out` can be written for `config`'s inputs: not
+/// over any input, not existing unless `force`, and every recording one trajdrift can copy (opened
+/// here, so a wrong path fails now rather than after the evaluation).
+pub fn check_annotate(config: &EvalConfig, out: &Path, force: bool) -> Result<()> {
+    let recordings = config.recordings();
+    for input in recordings.iter().chain(text_inputs(config).iter()) {
+        check_output(input, out, force)?;
+        if input.is_dir() && out.starts_with(input) {
+            return Err(Error::InvalidArgument(format!(
+                "{}: --annotate would write inside the input folder {}; choose another output file",
+                out.display(),
+                input.display()
+            )));
+        }
+    }
+    if recordings.is_empty() {
+        check_output(Path::new(""), out, force)?;
+    } else {
+        crate::sources::open_all(&recordings)?;
+    }
+    Ok(())
+}
+
+/// The text files among the inputs (never to be overwritten either).
+fn text_inputs(config: &EvalConfig) -> Vec<PathBuf> {
+    std::iter::once(&config.reference)
+        .chain(&config.estimates)
+        .filter_map(|i| match &i.input {
+            TrajectoryInput::TumFile(p) => Some(p.clone()),
+            TrajectoryInput::Topic(_) => None,
+        })
+        .collect()
+}
+
+/// The one input that is copied record by record (keeping its ids, attachments and metadata): a
+/// single MCAP file.
+fn single_mcap(recordings: &[PathBuf]) -> Option<&Path> {
+    match recordings {
+        [one] if !one.is_dir() && crate::sources::mcap::McapSource::open(one).is_ok() => {
+            Some(one.as_path())
+        }
+        _ => None,
+    }
+}
+
+/// Writes the annotated copy of the evaluated inputs to `out`: every input message (of one MCAP file,
+/// a ROS 1 bag, a rosbag2 folder or a mission of several) plus the trajdrift channels; with text
+/// inputs only, the trajdrift channels alone. `report` and `inputs` come from
 /// [`crate::eval::evaluate_with_inputs`] with `config`.
 pub fn annotate(
     config: &EvalConfig,
@@ -75,18 +123,78 @@ pub fn annotate(
     force: bool,
     progress: Progress<'_>,
 ) -> Result<AnnotateOutcome> {
-    let Some(recording) = config.recording.as_deref() else {
-        return Err(Error::InvalidArgument(
-            "--annotate needs a RECORDING (.mcap) to copy".into(),
-        ));
-    };
-    check_output(recording, out, force)?;
+    check_annotate(config, out, force)?;
+    let recordings = config.recordings();
     let plan = plan(config, report, inputs);
-    let info: InputInfo = read_input_info(recording);
+    let mcap_input = single_mcap(&recordings);
+    let recording = match (mcap_input, recordings.is_empty()) {
+        (None, false) => Some(
+            crate::sources::open::open_recording(&recordings[0]).and_then(
+                |first| match recordings.len() {
+                    1 => Ok(first),
+                    _ => {
+                        let mut parts = vec![first];
+                        for p in &recordings[1..] {
+                            parts.push(crate::sources::open::open_recording(p)?);
+                        }
+                        Ok(Box::new(crate::sources::mission::Mission::new(
+                            &recordings[0],
+                            parts,
+                        )?) as crate::sources::mission::Part)
+                    }
+                },
+            )?,
+        ),
+        _ => None,
+    };
+    let (info, profile) = match (mcap_input, &recording) {
+        (Some(path), _) => (read_input_info(path), String::new()),
+        (None, Some(rec)) => {
+            let (channels, _) = rec.channel_counts()?;
+            let info = InputInfo {
+                schema_ids: (1..=u16::try_from(channels.len()).unwrap_or(u16::MAX)).collect(),
+                channel_ids: channels.iter().map(|c| c.id).collect(),
+                compression: None,
+            };
+            (info, any_input::profile(&channels).to_string())
+        }
+        (None, None) => (InputInfo::default(), String::new()),
+    };
     let schema_ids = InputInfo::free_ids(&info.schema_ids, 3);
     let channel_ids = InputInfo::free_ids(&info.channel_ids, 1 + 3 * plan.estimates.len());
     let mut annotator = Annotator::new(out.to_path_buf(), plan, &schema_ids, &channel_ids)?;
+    let options = mcap::WriteOptions::new()
+        .compression(info.output_compression())
+        .library(concat!("trajdrift ", env!("CARGO_PKG_VERSION")));
+    let copy = write_atomically(out, |file| match mcap_input {
+        Some(path) => copy_with(path, file, out, options, &mut annotator, progress),
+        None => any_input::copy_recording(
+            recording
+                .as_deref()
+                .map(|r| r as &dyn crate::sources::recording::Recording),
+            file,
+            out,
+            options,
+            &profile,
+            &mut annotator,
+            progress,
+        ),
+    })?;
+    Ok(AnnotateOutcome {
+        path: out.to_path_buf(),
+        copy,
+        counts: annotator.counts(),
+    })
+}
 
+/// Writes `out` through `write` into a temporary file beside it, synced and renamed when complete;
+/// removed on failure.
+fn write_atomically(
+    out: &Path,
+    write: impl FnOnce(
+        std::io::BufWriter<std::fs::File>,
+    ) -> Result<(CopyOutcome, std::io::BufWriter<std::fs::File>)>,
+) -> Result<CopyOutcome> {
     let out_err = |e: std::io::Error| Error::Output {
         path: out.to_path_buf(),
         detail: e.to_string(),
@@ -102,34 +210,17 @@ pub fn annotate(
     let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
     let result = (|| -> Result<CopyOutcome> {
         let file = std::fs::File::create(&tmp).map_err(out_err)?;
-        let options = mcap::WriteOptions::new()
-            .compression(info.output_compression())
-            .library(concat!("trajdrift ", env!("CARGO_PKG_VERSION")));
-        let (outcome, mut sink) = copy_with(
-            recording,
-            std::io::BufWriter::new(file),
-            out,
-            options,
-            &mut annotator,
-            progress,
-        )?;
+        let (outcome, mut sink) = write(std::io::BufWriter::new(file))?;
         sink.flush().map_err(out_err)?;
         sink.get_ref().sync_all().map_err(out_err)?;
         drop(sink);
         std::fs::rename(&tmp, out).map_err(out_err)?;
         Ok(outcome)
     })();
-    match result {
-        Ok(copy) => Ok(AnnotateOutcome {
-            path: out.to_path_buf(),
-            copy,
-            counts: annotator.counts(),
-        }),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
     }
+    result
 }
 
 fn curvature_messages(traj: &Trajectory, config: &EvalConfig) -> Vec<(u64, CurvatureMessage)> {

@@ -163,28 +163,16 @@ impl Manifest {
         Ok(manifest)
     }
 
-    /// One mission per `.mcap` in `dir` or its direct subfolders, named by its path under `dir`
-    /// without the extension, `/` written `-` (`runs/a.mcap` → `runs-a`), sorted by name; each
-    /// evaluated as `request` says.
+    /// One mission per recording found in `dir` by [`super::discover::missions_in`] (`.mcap` and
+    /// `.bag` files, rosbag2 folders, and mission folders of bags one level down), named by its path
+    /// under `dir` (`runs/a.mcap` → `runs-a`), sorted by name; each evaluated as `request` says.
     pub fn from_dir(dir: &Path, request: &FolderRequest) -> Result<Manifest> {
-        let mut found = Vec::new();
-        collect_mcaps(dir, 2, &mut found)?;
-        found.sort();
-        let missions = found
+        let missions = super::discover::missions_in(dir)?
             .into_iter()
-            .map(|p| {
-                let rel = p.strip_prefix(dir).unwrap_or(&p).with_extension("");
-                let name: String = rel
-                    .to_string_lossy()
-                    .chars()
-                    .map(|c| match c {
-                        '/' | '\\' => '-',
-                        c if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') => c,
-                        _ => '_',
-                    })
-                    .collect();
+            .map(|m| {
+                let name = m.name;
                 let config = mission_config(
-                    p,
+                    m.recording,
                     request.reference.as_deref().map(NamedInput::topic),
                     request
                         .estimates
@@ -208,7 +196,7 @@ impl Manifest {
     fn check(&self, origin: &str) -> Result<()> {
         if self.missions.is_empty() {
             return Err(Error::InvalidArgument(format!(
-                "{origin}: no mission (add [[mission]] entries, or .mcap files to the folder)"
+                "{origin}: no mission (add [[mission]] entries, or recordings to the folder: .mcap, .bag, rosbag2 folders, mission folders of bags)"
             )));
         }
         let mut names: Vec<&str> = Vec::new();
@@ -243,7 +231,7 @@ fn mission_config(
     let (mut config, preset_parameters) = match preset {
         Some((spec, base)) => {
             let p = Preset::load_from(spec, base)?;
-            let s = p.select_in(Some(&recording), reference, estimates)?;
+            let s = p.select_in(std::slice::from_ref(&recording), reference, estimates)?;
             let c = EvalConfig::new(Some(recording), s.reference, s.estimates);
             (c, p.parameters)
         }
@@ -266,18 +254,6 @@ fn stem(p: &Path) -> String {
     p.file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default()
-}
-
-fn collect_mcaps(dir: &Path, depth: usize, out: &mut Vec<PathBuf>) -> Result<()> {
-    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
-        let path = entry.map_err(|e| Error::io(dir, e))?.path();
-        if path.is_dir() && depth > 1 {
-            collect_mcaps(&path, depth - 1, out)?;
-        } else if path.extension().is_some_and(|e| e == "mcap") {
-            out.push(path);
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]

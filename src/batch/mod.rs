@@ -2,8 +2,9 @@
 //! results and a summary across missions; `--shard I/N` and `trajdrift merge` spread a batch over a
 //! cluster.
 //!
-//! [`manifest`] reads what to run, [`run`] runs it, [`summary`] aggregates, [`shard`] splits.
+//! [`discover`] finds the missions of a folder, [`manifest`] reads what to run, [`run`] runs it, [`summary`] aggregates, [`shard`] splits.
 
+pub mod discover;
 pub mod manifest;
 pub mod run;
 pub mod shard;

@@ -138,12 +138,12 @@ fn run_mission(
     progress: BatchProgress<'_>,
 ) -> Result<MissionResult> {
     let start = Instant::now();
-    let size = m
+    let size: u64 = m
         .config
-        .recording
-        .as_ref()
-        .and_then(|p| std::fs::metadata(p).ok())
-        .map_or(0, |md| md.len());
+        .recordings()
+        .iter()
+        .map(|p| crate::sources::open::input_size(p))
+        .sum();
     let passes = if opts.annotate { 2 } else { 1 };
     progress(BatchEvent::Started {
         mission: &m.name,

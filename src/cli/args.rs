@@ -39,15 +39,19 @@ pub enum ExportFormatArg {
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
-    /// The recording (MCAP, ROS 1 bag, rosbag2 folder), or a text trajectory file.
-    pub recording: PathBuf,
+    /// The recording (MCAP, ROS 1 bag, rosbag2 folder), several files of one mission or a mission
+    /// folder, or a text trajectory file; then OUT, the output file (`-` = stdout).
+    #[arg(required = true, num_args = 1.., value_name = "RECORDING... OUT")]
+    pub recording: Vec<PathBuf>,
     /// The topic to write (not needed for a text file).
     #[arg(long, value_name = "TOPIC")]
     pub topic: Option<String>,
     /// Output format.
     #[arg(long, value_enum, default_value = "tum")]
     pub format: ExportFormatArg,
-    /// Output file (`-` = stdout).
+    /// Output file (`-` = stdout): the last positional argument, taken from `recording` by the
+    /// command (clap cannot end a list of positionals with another one).
+    #[arg(skip)]
     pub out: PathBuf,
     /// Which stamp to use: header or log.
     #[arg(long, value_name = "WORD", default_value = "header", value_parser = word::<StampSource>())]
@@ -59,8 +63,9 @@ pub struct ExportArgs {
 #[derive(Debug, Args)]
 #[command(allow_negative_numbers = true)]
 pub struct EvalArgs {
-    /// The recording (.mcap). Optional when both sides are text files.
-    pub recording: Option<PathBuf>,
+    /// The recording (MCAP, ROS 1 bag, rosbag2 folder), or several files of one mission (e.g. a
+    /// GrandTour mission's bags), or a mission folder. Optional when both sides are text files.
+    pub recording: Vec<PathBuf>,
     /// Reference topic.
     #[arg(long, value_name = "TOPIC", required_unless_present_any = ["reference_file", "preset"])]
     pub reference: Option<String>,
@@ -143,8 +148,10 @@ pub struct TextArgs {
 
 #[derive(Debug, Args)]
 pub struct TopicsArgs {
-    /// The recording (.mcap).
-    pub recording: PathBuf,
+    /// The recording (MCAP, ROS 1 bag, rosbag2 folder), several files of one mission, or a mission
+    /// folder.
+    #[arg(required = true, num_args = 1..)]
+    pub recording: Vec<PathBuf>,
     /// Write the list as JSON to FILE (`-` = stdout).
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
@@ -193,6 +200,14 @@ pub struct SimulateArgs {
         allow_hyphen_values = true
     )]
     pub clock_drift_ppm: f64,
+    /// Write a GrandTour-like mission instead: OUT is a folder of per-sensor ROS 1 bags
+    /// (`<stamp>_cpt7_ie_tc.bag`, `_ap20_prism_position.bag`, `_dlio.bag`, `_anymal_state.bag`,
+    /// `_tf_minimal.bag`) with GrandTour's topic names and frames.
+    #[arg(long)]
+    pub grandtour: bool,
+    /// With --grandtour: the same messages in one `<stamp>_merged.bag`.
+    #[arg(long, requires = "grandtour")]
+    pub merged: bool,
 }
 
 #[derive(Debug, Args)]

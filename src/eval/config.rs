@@ -177,6 +177,9 @@ fn split_name(spec: &str) -> (Option<String>, &str) {
 pub struct EvalConfig {
     /// The recording (needed when any input is a topic).
     pub recording: Option<PathBuf>,
+    /// Further recordings of the same mission (e.g. one ROS 1 bag per sensor group), read together
+    /// with `recording` as one ([`crate::sources::mission`]); empty for a single recording.
+    pub more_recordings: Vec<PathBuf>,
     pub reference: NamedInput,
     pub estimates: Vec<NamedInput>,
     pub stamp: StampSource,
@@ -227,6 +230,7 @@ impl EvalConfig {
     ) -> Self {
         EvalConfig {
             recording,
+            more_recordings: Vec::new(),
             reference,
             estimates,
             stamp: StampSource::Header,
@@ -253,6 +257,15 @@ impl EvalConfig {
             reference_lever: None,
             estimate_levers: Vec::new(),
         }
+    }
+
+    /// Every recording of the mission: `recording` then `more_recordings` (empty without one).
+    pub fn recordings(&self) -> Vec<PathBuf> {
+        self.recording
+            .iter()
+            .chain(&self.more_recordings)
+            .cloned()
+            .collect()
     }
 
     /// Whether any parameter is left to be measured on the reference (`Platform::Auto` and not

@@ -67,7 +67,7 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
     let mut extraction = None;
     let (path, bytes) = match &config.recording {
         Some(rec) => {
-            let source = crate::sources::open(rec)?;
+            let source = crate::sources::open_all(&config.recordings())?;
             if !topics.is_empty() {
                 let mut unique = topics.clone();
                 unique.dedup();

@@ -221,11 +221,12 @@ impl Preset {
         })
     }
 
-    /// [`Preset::select`] in the recording at `recording`, opened for its topic list (skipped when the
-    /// user gave both the reference and the estimates).
+    /// [`Preset::select`] in the recording (one or more files of a mission, or a folder) at
+    /// `recordings`, opened for its topic list (skipped when the user gave both the reference and the
+    /// estimates).
     pub fn select_in(
         &self,
-        recording: Option<&Path>,
+        recordings: &[std::path::PathBuf],
         reference: Option<NamedInput>,
         estimates: Vec<NamedInput>,
     ) -> Result<Selection> {
@@ -236,13 +237,13 @@ impl Preset {
                 skipped: Vec::new(),
             });
         }
-        let path = recording.ok_or_else(|| {
+        let path = recordings.first().ok_or_else(|| {
             Error::InvalidArgument(format!(
                 "--preset {} picks topics of a RECORDING; pass one",
                 self.name
             ))
         })?;
-        let topics = crate::sources::open(path)?.topics()?;
+        let topics = crate::sources::open_all(recordings)?.topics()?;
         self.select(path, &topics, reference, estimates)
     }
 }

@@ -4,7 +4,9 @@
 //! The project's own fixtures (`fixtures/`) are written by this module (`trajdrift simulate`), so the
 //! README's first command runs on data we can regenerate and whose truth we know.
 
+pub mod grandtour;
 pub mod motion;
+pub mod ros1_definitions;
 pub mod writer;
 
 use nalgebra::{UnitQuaternion, Vector3};

@@ -12,48 +12,14 @@ use nalgebra::Vector3;
 
 use crate::decode::{self, geodesy, Encoding, MessageKind, SamplePosition};
 use crate::error::{Error, Result};
-use crate::sources::mcap::{ChannelInfo, MessageRef, StreamOutcome};
+use crate::sources::recording::ChannelInfo;
+use crate::sources::recording::Recording;
 use crate::sources::tf_chain::{self, ChainRequest, TfCollector};
 use crate::sources::{
     ExtractOptions, ExtractedTopic, Extraction, Progress, Source, StampSource, StaticTransform,
-    TopicInfo, Warning,
+    TopicInfo,
 };
 use crate::trajectory::Trajectory;
-
-/// Asked once per channel whether its messages are wanted.
-pub type Select<'a> = &'a mut dyn FnMut(&ChannelInfo) -> bool;
-/// Gets every message of a selected channel; an error stops the pass.
-pub type OnMessage<'a> = &'a mut dyn FnMut(&ChannelInfo, &MessageRef<'_>) -> Result<()>;
-
-/// A recording read by one streaming pass in file order.
-pub trait Recording {
-    /// What error messages name: the file or folder.
-    fn path(&self) -> &Path;
-    /// Size of the recording in bytes (for progress bars and the report).
-    fn recording_size(&self) -> u64;
-    /// Every channel with its message count: from an index when the recording has one, else from a
-    /// pass that decodes nothing.
-    fn channel_counts(&self) -> Result<(Vec<ChannelInfo>, HashMap<u16, u64>)>;
-    /// The channels when an index lists them without a pass (to fail fast on a wrong topic).
-    fn known_channels(&self) -> Option<Vec<ChannelInfo>>;
-    /// One pass over the messages. Channel ids must be unique across the whole recording.
-    fn pass(
-        &self,
-        select: Select<'_>,
-        progress: Progress<'_>,
-        on_message: OnMessage<'_>,
-    ) -> Result<StreamOutcome>;
-    /// The warning for a recording cut short at byte `offset`.
-    fn truncation_warning(&self, offset: u64) -> Warning {
-        Warning {
-            code: "truncated_recording".into(),
-            message: format!(
-                "{}: recording cut short at byte {offset} (the recorder probably stopped abruptly); read up to the last complete record",
-                self.path().display()
-            ),
-        }
-    }
-}
 
 /// Every recording is a [`Source`]: its topics from its channel counts, its trajectories by
 /// [`extract`], its TF frames by [`crate::sources::tf_frames::frame_pairs`].

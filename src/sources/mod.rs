@@ -7,11 +7,13 @@
 pub mod bag;
 pub mod extract;
 pub mod mcap;
+pub mod mission;
 pub mod open;
+pub mod recording;
 pub mod rosbag2;
 pub mod tum;
 
-pub use open::open;
+pub use open::{open, open_all};
 pub mod euroc;
 pub mod kitti;
 pub mod mapped_csv;

@@ -30,7 +30,7 @@ use nalgebra::{Isometry3, Translation3};
 use crate::decode::tf::{decode_tf_message, is_tf_message, TfEdge};
 use crate::decode::Encoding;
 use crate::error::{Error, Result};
-use crate::sources::mcap::ChannelInfo;
+use crate::sources::recording::ChannelInfo;
 use crate::trajectory::tf_compose::{compose, Composed, EdgeSeries, Link};
 
 /// The type name reported for a chain: the schema its edges come from. It is not a type trajdrift

@@ -7,7 +7,7 @@
 use std::collections::{BTreeMap, HashMap};
 
 use crate::error::Result;
-use crate::sources::extract::Recording;
+use crate::sources::recording::Recording;
 use crate::sources::tf_chain::{decode_edges, frame_name, is_static_channel, is_tf_channel};
 use crate::sources::{Progress, TopicInfo};
 

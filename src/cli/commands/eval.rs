@@ -31,7 +31,7 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
     let mut notes = Vec::new();
     let (reference, estimates) = match &preset {
         Some(p) => {
-            let s = p.select_in(a.recording.as_deref(), reference, estimates)?;
+            let s = p.select_in(&a.recording, reference, estimates)?;
             notes.extend(s.skipped.iter().map(|n| {
                 format!(
                     "preset {}: estimate {n} is not in the recording, skipped",
@@ -45,7 +45,8 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
             estimates,
         ),
     };
-    let mut c = EvalConfig::new(a.recording.clone(), reference, estimates);
+    let mut c = EvalConfig::new(a.recording.first().cloned(), reference, estimates);
+    c.more_recordings = a.recording.iter().skip(1).cloned().collect();
     c.export_aligned = a.export_aligned.clone();
     c.text = text_options(&a.text)?;
     c.reference_lever = a
@@ -78,15 +79,15 @@ pub fn run(a: EvalArgs) -> Result<u8> {
             eprintln!("note: {n}");
         }
     }
-    if let (Some(out), Some(rec)) = (&a.annotate, &config.recording) {
+    if let Some(out) = &a.annotate {
         // Refuse before the evaluation pass rather than after it.
-        trajdrift::annotate::check_output(rec, out, a.force)?;
+        trajdrift::annotate::check_annotate(&config, out, a.force)?;
     }
-    let total = config
-        .recording
-        .as_ref()
-        .and_then(|p| std::fs::metadata(p).ok())
-        .map_or(0, |m| m.len());
+    let total: u64 = config
+        .recordings()
+        .iter()
+        .map(|p| trajdrift::sources::open::input_size(p))
+        .sum();
     let progress = ReadProgress::new(total, a.quiet);
     let result = evaluate_with_inputs(&config, &|b| progress.update(b));
     progress.finish();

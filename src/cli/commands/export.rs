@@ -14,17 +14,25 @@ use crate::cli::args::{text_options, ExportArgs, ExportFormatArg};
 use crate::cli::EXIT_OK;
 
 /// Runs the command; returns the exit code.
-pub fn run(a: ExportArgs) -> Result<u8> {
-    let (source, topic): (Box<dyn Source>, String) = if is_recording(&a.recording) {
+pub fn run(mut a: ExportArgs) -> Result<u8> {
+    if a.recording.len() < 2 {
+        return Err(anyhow!(trajdrift::Error::InvalidArgument(
+            "give the RECORDING (or text file) and then OUT (`-` = stdout)".into()
+        )));
+    }
+    a.out = a.recording.pop().unwrap_or_default();
+    let first = &a.recording[0];
+    let (source, topic): (Box<dyn Source>, String) = if a.recording.len() > 1 || is_recording(first)
+    {
         let topic = a.topic.clone().ok_or_else(|| {
             anyhow!(trajdrift::Error::InvalidArgument(format!(
                 "{}: give --topic TOPIC (see `trajdrift topics`)",
-                a.recording.display()
+                first.display()
             )))
         })?;
-        (trajdrift::sources::open(&a.recording)?, topic)
+        (trajdrift::sources::open_all(&a.recording)?, topic)
     } else {
-        let s = TextSource::open(&a.recording, text_options(&a.text)?)?;
+        let s = TextSource::open(first, text_options(&a.text)?)?;
         let topic = s.channel();
         (Box::new(s), topic)
     };

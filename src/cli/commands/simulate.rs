@@ -10,6 +10,34 @@ use trajdrift::simulate::{default_route, simulate, MissionConfig};
 use crate::cli::args::SimulateArgs;
 use crate::cli::EXIT_OK;
 
+/// `--grandtour`: the mission as a folder of per-sensor bags (the bulk split over the sensor bags).
+fn grandtour(
+    a: &SimulateArgs,
+    mission: &trajdrift::simulate::Mission,
+    bulk_bytes: usize,
+) -> Result<u8> {
+    use trajdrift::simulate::grandtour::{write_grandtour, GrandTourOptions};
+    let mut options = GrandTourOptions {
+        merged: a.merged,
+        ..GrandTourOptions::default()
+    };
+    let sensor_bags = options.bags.len() - 1;
+    options.bulk_bytes = bulk_bytes / sensor_bags;
+    let files = write_grandtour(&a.out, mission, &options)?;
+    if let Some(path) = &a.truth {
+        let mut bytes = serde_json::to_vec_pretty(&truth_json(mission))?;
+        bytes.push(b'\n');
+        write_output(path, &bytes)?;
+    }
+    eprintln!(
+        "wrote {} ({} bags, {:.0} s)",
+        a.out.display(),
+        files.len(),
+        mission.duration_s
+    );
+    Ok(EXIT_OK)
+}
+
 /// Runs the command; returns the exit code.
 pub fn run(a: SimulateArgs) -> Result<u8> {
     if a.out.exists() && !a.force {
@@ -32,6 +60,9 @@ pub fn run(a: SimulateArgs) -> Result<u8> {
     let mission = simulate(&config, &route);
     let bulk_messages = (mission.duration_s * 10.0).max(1.0);
     let bulk_bytes = (a.bulk_mib as f64 * 1024.0 * 1024.0 / bulk_messages) as usize;
+    if a.grandtour {
+        return grandtour(&a, &mission, bulk_bytes);
+    }
     let tmp = a
         .out
         .with_extension(format!("mcap.{}.tmp", std::process::id()));

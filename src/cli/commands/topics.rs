@@ -9,14 +9,18 @@ use crate::cli::EXIT_OK;
 
 /// Runs the command; returns the exit code.
 pub fn run(a: TopicsArgs) -> Result<u8> {
-    let source = trajdrift::sources::open(&a.recording)?;
+    let source = trajdrift::sources::open_all(&a.recording)?;
+    let files = mission_files(&a.recording)?;
     let mut topics = source.topics()?;
     // TF frames are not in any index: one more pass, over the TF channels only.
     let pairs = source.frame_pairs(&|_| {})?;
     trajdrift::sources::tf_frames::attach(&mut topics, &pairs);
     let presets = trajdrift::eval::preset::matching(&topics);
     if let Some(path) = &a.json {
-        let listing = serde_json::json!({ "topics": topics, "presets": presets });
+        let mut listing = serde_json::json!({ "topics": topics, "presets": presets });
+        if !files.is_empty() {
+            listing["files"] = serde_json::to_value(&files)?;
+        }
         let mut bytes = serde_json::to_vec_pretty(&listing)?;
         bytes.push(b'\n');
         write_output(path, &bytes)?;
@@ -54,6 +58,13 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
         );
     }
     println!("presets matching: {}", presets_line(&presets));
+    if !files.is_empty() {
+        println!();
+        println!("files of the mission (topics above are merged across them):");
+        for f in &files {
+            println!("  {}: {}", f.path, f.topics.join(", "));
+        }
+    }
     if !pairs.is_empty() {
         let width = pairs
             .iter()
@@ -99,4 +110,33 @@ fn presets_line(presets: &[String]) -> String {
     } else {
         format!("{} (use --preset NAME)", presets.join(", "))
     }
+}
+
+/// One file of a mission, as `topics` lists it.
+#[derive(serde::Serialize)]
+struct MissionFile {
+    path: String,
+    topics: Vec<String>,
+}
+
+/// The files of a mission (several paths, or a mission folder) with their topics; empty for one
+/// recording.
+fn mission_files(paths: &[std::path::PathBuf]) -> Result<Vec<MissionFile>> {
+    let files = match paths {
+        [one] if one.is_dir() && !one.join("metadata.yaml").is_file() => {
+            trajdrift::sources::open::recordings_in(one)?
+        }
+        [_] => return Ok(Vec::new()),
+        many => many.to_vec(),
+    };
+    files
+        .iter()
+        .map(|p| {
+            let topics = trajdrift::sources::open(p)?.topics()?;
+            Ok(MissionFile {
+                path: p.display().to_string(),
+                topics: topics.into_iter().map(|t| t.topic).collect(),
+            })
+        })
+        .collect()
 }

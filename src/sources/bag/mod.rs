@@ -12,8 +12,9 @@ use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::sources::extract::{OnMessage, Recording, Select};
-use crate::sources::mcap::{ChannelInfo, MessageRef, StreamOutcome};
+use crate::sources::recording::{
+    ChannelInfo, MessageRef, OnMessage, Recording, Select, StreamOutcome,
+};
 use crate::sources::Progress;
 
 use records::{op, Fields, Next, MAGIC};
@@ -198,6 +199,7 @@ fn connection(
         schema_name: d.text("type").unwrap_or_default(),
         schema_encoding: "ros1msg".into(),
         message_encoding: "ros1".into(),
+        schema_data: d.get("message_definition").unwrap_or_default().into(),
     })
 }
 

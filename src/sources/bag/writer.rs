@@ -2,10 +2,10 @@
 //! written by our own code).
 //!
 //! It writes the bag header, chunks (each carrying the connection records of the connections first
-//! used in it, then message data records) and the index (connections, chunk infos with
-//! per-connection counts). The per-chunk index data records (op 0x04) that `rosbag` uses for
-//! random access are not written: trajdrift reads in file order and never needs them
-//! (`rosbag reindex` adds them to a copy if another tool needs them).
+//! used in it, then message data records), after each chunk its index data records (op 0x04: per
+//! connection, each message's time and offset in the chunk, which `rosbag` and `rosbags` read;
+//! trajdrift itself reads in file order and skips them) and the index (connections, chunk infos with
+//! per-connection counts).
 
 use std::collections::BTreeMap;
 use std::io::{Seek, SeekFrom, Write};
@@ -27,12 +27,14 @@ pub struct BagWriter<W: Write + Seek> {
     out: W,
     compression: BagCompression,
     chunk_target: usize,
-    /// Connection id → (topic, type, md5sum, definition).
-    connections: Vec<(String, String)>,
+    /// Connection id → (topic, type, message definition, md5sum).
+    connections: Vec<(String, String, String, String)>,
     /// Connections whose record is already in some chunk... and in the current one.
     in_chunk: Vec<bool>,
     chunk: Vec<u8>,
     chunk_counts: BTreeMap<u32, u32>,
+    /// Per connection, (time, offset in the uncompressed chunk) of the current chunk's messages.
+    chunk_index: BTreeMap<u32, Vec<(u64, u32)>>,
     chunk_times: Option<(u64, u64)>,
     /// (chunk position, start, end, counts) for the index.
     chunk_infos: Vec<(u64, u64, u64, BTreeMap<u32, u32>)>,
@@ -79,6 +81,7 @@ impl<W: Write + Seek> BagWriter<W> {
             in_chunk: Vec::new(),
             chunk: Vec::new(),
             chunk_counts: BTreeMap::new(),
+            chunk_index: BTreeMap::new(),
             chunk_times: None,
             chunk_infos: Vec::new(),
         };
@@ -103,20 +106,38 @@ impl<W: Write + Seek> BagWriter<W> {
         self.out.write_all(&rec)
     }
 
-    /// Adds a connection; returns its id.
+    /// Adds a connection without a message definition; returns its id.
     pub fn add_connection(&mut self, topic: &str, type_name: &str) -> u32 {
-        self.connections.push((topic.into(), type_name.into()));
+        self.add_connection_with_definition(topic, type_name, "", "*")
+    }
+
+    /// Adds a connection with its `message_definition` (the `gendeps --cat` text readers such as
+    /// `mcap-ros1-support` decode with) and `md5sum` (which `rosbag` and `rosbags` check); returns
+    /// its id.
+    pub fn add_connection_with_definition(
+        &mut self,
+        topic: &str,
+        type_name: &str,
+        definition: &str,
+        md5sum: &str,
+    ) -> u32 {
+        self.connections.push((
+            topic.into(),
+            type_name.into(),
+            definition.into(),
+            md5sum.into(),
+        ));
         self.in_chunk.push(false);
         (self.connections.len() - 1) as u32
     }
 
     fn connection_record(&self, out: &mut Vec<u8>, conn: u32) {
-        let (topic, ty) = &self.connections[conn as usize];
+        let (topic, ty, definition, md5sum) = &self.connections[conn as usize];
         let data = [
             field("topic", topic.as_bytes()),
             field("type", ty.as_bytes()),
-            field("md5sum", b"*"),
-            field("message_definition", b""),
+            field("md5sum", md5sum.as_bytes()),
+            field("message_definition", definition.as_bytes()),
         ]
         .concat();
         record(
@@ -138,6 +159,10 @@ impl<W: Write + Seek> BagWriter<W> {
             self.connection_record(&mut c, conn);
             self.chunk = c;
         }
+        self.chunk_index
+            .entry(conn)
+            .or_default()
+            .push((time_ns, self.chunk.len() as u32));
         record(
             &mut self.chunk,
             &[
@@ -185,6 +210,22 @@ impl<W: Write + Seek> BagWriter<W> {
             ],
             &data,
         );
+        for (conn, entries) in std::mem::take(&mut self.chunk_index) {
+            let data: Vec<u8> = entries
+                .iter()
+                .flat_map(|&(t, offset)| [&time(t)[..], &offset.to_le_bytes()[..]].concat())
+                .collect();
+            record(
+                &mut rec,
+                &[
+                    field("op", &[op::INDEX_DATA]),
+                    field("ver", &1u32.to_le_bytes()),
+                    field("conn", &conn.to_le_bytes()),
+                    field("count", &(entries.len() as u32).to_le_bytes()),
+                ],
+                &data,
+            );
+        }
         self.out.write_all(&rec)?;
         let (s, e) = self.chunk_times.take().unwrap_or((0, 0));
         self.chunk_infos

@@ -12,10 +12,11 @@ use std::path::{Path, PathBuf};
 
 use crate::decode::MessageKind;
 use crate::error::{Error, Result};
-use crate::sources::extract::{self, OnMessage, Recording, Select};
+use crate::sources::extract;
+use crate::sources::recording::{ChannelInfo, OnMessage, Recording, Select, StreamOutcome};
 use crate::sources::{Progress, Warning};
 
-pub use stream::{for_each_message, ChannelInfo, MessageRef, StreamOutcome};
+pub use stream::for_each_message;
 pub use summary::{read_summary, SummaryInfo};
 
 /// An MCAP file on disk. Opening checks the magic; nothing else is read until asked.

@@ -16,48 +16,8 @@ use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use mcap::McapError;
 
 use crate::error::{Error, Result};
+use crate::sources::recording::{ChannelInfo, MessageRef, StreamOutcome};
 use crate::sources::Progress;
-
-/// One channel of a recording, with its schema's name.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct ChannelInfo {
-    /// Channel id, unique within the file.
-    pub id: u16,
-    pub topic: String,
-    /// Schema name, e.g. `geometry_msgs/msg/PoseStamped`; empty for schemaless channels.
-    pub schema_name: String,
-    /// Schema encoding, e.g. `ros2msg`; empty for schemaless channels.
-    pub schema_encoding: String,
-    /// Message encoding, e.g. `cdr`.
-    pub message_encoding: String,
-}
-
-/// A message on a selected channel, borrowed from the reader's buffer.
-#[derive(Debug, Clone, Copy)]
-pub struct MessageRef<'a> {
-    pub channel_id: u16,
-    pub sequence: u32,
-    /// Nanoseconds; when the recorder received the message.
-    pub log_time: u64,
-    /// Nanoseconds; when the publisher sent it.
-    pub publish_time: u64,
-    /// The serialized message (CDR for ROS 2).
-    pub data: &'a [u8],
-}
-
-/// What one pass learned about the whole file.
-#[derive(Debug, Clone, Default)]
-pub struct StreamOutcome {
-    /// Every channel, in the order of first appearance (a repeated channel record is listed once).
-    pub channels: Vec<ChannelInfo>,
-    /// Messages per channel id, selected or not.
-    pub message_counts: HashMap<u16, u64>,
-    /// Bytes read from the file.
-    pub bytes_read: u64,
-    /// `Some(offset)` when the file ended inside a record (or before its Data End record): everything
-    /// before was read, `offset` is where the file stops.
-    pub truncated_at: Option<u64>,
-}
 
 /// How many bytes to ask the OS for at least per read: fewer syscalls than the reader's
 /// per-record requests (a buffered reader would copy the bytes twice).
@@ -83,7 +43,7 @@ where
 {
     let (mut file, mut reader, magic, file_size) = open_linear(path)?;
 
-    let mut schemas: HashMap<u16, (String, String)> = HashMap::new();
+    let mut schemas: HashMap<u16, (String, String, std::sync::Arc<[u8]>)> = HashMap::new();
     // Channel id → (index into outcome.channels, selected).
     let mut channels: HashMap<u16, (usize, bool)> = HashMap::new();
     let mut out = StreamOutcome {
@@ -150,10 +110,12 @@ where
                     on_message(&out.channels[index], &message)?;
                 }
                 op::SCHEMA => {
-                    if let Ok(Record::Schema { header, .. }) = mcap::parse_record(opcode, data) {
-                        schemas
-                            .entry(header.id)
-                            .or_insert((header.name, header.encoding));
+                    if let Ok(Record::Schema { header, data }) = mcap::parse_record(opcode, data) {
+                        schemas.entry(header.id).or_insert((
+                            header.name,
+                            header.encoding,
+                            data.as_ref().into(),
+                        ));
                     }
                 }
                 op::CHANNEL => {
@@ -165,7 +127,7 @@ where
                     if channels.contains_key(&c.id) {
                         continue;
                     }
-                    let (schema_name, schema_encoding) =
+                    let (schema_name, schema_encoding, schema_data) =
                         schemas.get(&c.schema_id).cloned().unwrap_or_default();
                     let info = ChannelInfo {
                         id: c.id,
@@ -173,6 +135,7 @@ where
                         schema_name,
                         schema_encoding,
                         message_encoding: c.message_encoding,
+                        schema_data,
                     };
                     let selected = select(&info);
                     channels.insert(info.id, (out.channels.len(), selected));

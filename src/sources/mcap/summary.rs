@@ -10,7 +10,7 @@ use std::path::Path;
 
 use mcap::sans_io::{SummaryReadEvent, SummaryReader, SummaryReaderOptions};
 
-use super::stream::ChannelInfo;
+use crate::sources::recording::ChannelInfo;
 
 /// What the summary says.
 #[derive(Debug, Clone, Default)]
@@ -59,10 +59,10 @@ pub fn read_summary(path: &Path) -> Option<SummaryInfo> {
         .channels
         .values()
         .map(|c| {
-            let (schema_name, schema_encoding) = c
+            let (schema_name, schema_encoding, schema_data) = c
                 .schema
                 .as_ref()
-                .map(|s| (s.name.clone(), s.encoding.clone()))
+                .map(|s| (s.name.clone(), s.encoding.clone(), s.data.as_ref().into()))
                 .unwrap_or_default();
             ChannelInfo {
                 id: c.id,
@@ -70,6 +70,7 @@ pub fn read_summary(path: &Path) -> Option<SummaryInfo> {
                 schema_name,
                 schema_encoding,
                 message_encoding: c.message_encoding.clone(),
+                schema_data,
             }
         })
         .collect();

@@ -6,14 +6,17 @@
 //! MCAP stream, `.db3` files through [`sqlite`].
 
 pub mod metadata;
+pub mod schemas;
 pub mod sqlite;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::sources::extract::{OnMessage, Recording, Select};
-use crate::sources::mcap::{for_each_message, ChannelInfo, MessageRef, StreamOutcome};
+use crate::sources::mcap::for_each_message;
+use crate::sources::recording::{
+    ChannelInfo, MessageRef, OnMessage, Recording, Select, StreamOutcome,
+};
 use crate::sources::Progress;
 
 use metadata::Metadata;
@@ -76,6 +79,7 @@ impl Rosbag2Source {
             size += len;
             files.push(p);
         }
+        let definitions = schemas::definitions(storage, &files);
         let mut channels = Vec::new();
         let mut counts = HashMap::new();
         for (i, t) in meta.topics_with_message_count.iter().enumerate() {
@@ -87,6 +91,10 @@ impl Rosbag2Source {
                 schema_name: t.topic_metadata.type_name.clone(),
                 schema_encoding: "ros2msg".into(),
                 message_encoding: t.topic_metadata.serialization_format.clone(),
+                schema_data: definitions
+                    .get(&t.topic_metadata.type_name)
+                    .cloned()
+                    .unwrap_or_default(),
             });
         }
         Ok(Rosbag2Source {

@@ -7,8 +7,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::sources::extract::OnMessage;
-use crate::sources::mcap::{ChannelInfo, MessageRef};
+use crate::sources::recording::{ChannelInfo, MessageRef, OnMessage};
 
 /// Streams the messages of the `selected` channels (by topic name) of the database `path`, in
 /// storage order. Rows are fetched one at a time: memory does not grow with the database.
