@@ -4,7 +4,7 @@
 
 mod common;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn batch(args: &[&str]) -> std::process::Output {
@@ -249,4 +249,82 @@ fn shard_auto_under_slurm_and_kubernetes_merges_to_the_whole_run() {
         .output()
         .unwrap();
     assert_eq!(none.status.code(), Some(2));
+}
+
+/// Every kind of mission in one folder — an MCAP, a ROS 1 bag, a rosbag2 folder and a mission folder
+/// of bags — evaluated with `batch`'s flags; then the same values through a manifest.
+#[test]
+fn a_folder_of_every_kind_takes_evals_flags_and_a_manifest_the_same() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let missions = d.join("missions");
+    std::fs::create_dir_all(missions.join("folder")).unwrap();
+    let fx = |m: &str, f: &str| common::mission(&shared, m).join(f);
+    let link = |from: PathBuf, to: PathBuf| std::os::unix::fs::symlink(from, to).unwrap();
+    link(fx("lever_arm", "mission.mcap"), missions.join("a.mcap"));
+    link(fx("legged", "mission_ros1.bag"), missions.join("b.bag"));
+    link(fx("gnss_outages", "rosbag2"), missions.join("c"));
+    link(
+        fx("lever_arm", "mission_ros1.bag"),
+        missions.join("folder/d.bag"),
+    );
+    let check = |out: &Path, names: &[&str]| {
+        for name in names {
+            let r = load(&out.join(format!("{name}.json")));
+            assert_eq!(r["status"], "ok", "{name}: {}", r["error"]);
+            let p = &r["report"]["parameters"];
+            assert_eq!(p["windows_m"], serde_json::json!([5.0, 10.0]), "{name}");
+            assert_eq!(p["offset_method"], "speed", "{name}");
+        }
+    };
+    let out = d.join("out-flags");
+    let o = batch(&[
+        missions.to_str().unwrap(),
+        "--reference",
+        "/reference/position",
+        "--estimate",
+        "/estimate/odom",
+        "--window",
+        "5,10",
+        "--offset-method",
+        "speed",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        matches!(o.status.code(), Some(0 | 3)),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    check(&out, &["a", "b", "c", "folder"]);
+
+    let manifest = d.join("m.toml");
+    let mut text = String::from("[defaults]\nwindow = [5, 10]\noffset_method = \"speed\"\n");
+    for (name, rec) in [
+        ("a", "a.mcap"),
+        ("b", "b.bag"),
+        ("c", "c"),
+        ("folder", "folder"),
+    ] {
+        text.push_str(&format!(
+            "\n[[mission]]\nname = \"{name}\"\nrecording = \"missions/{rec}\"\nreference = \"/reference/position\"\nestimates = [\"/estimate/odom\"]\n"
+        ));
+    }
+    std::fs::write(&manifest, text).unwrap();
+    let out_m = d.join("out-manifest");
+    let o = batch(&[manifest.to_str().unwrap(), "--out", out_m.to_str().unwrap()]);
+    assert!(
+        matches!(o.status.code(), Some(0 | 3)),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    check(&out_m, &["a", "b", "c", "folder"]);
+    for name in ["a", "b", "c", "folder"] {
+        let f = format!("{name}.json");
+        let (x, y) = (load(&out.join(&f)), load(&out_m.join(&f)));
+        assert_eq!(x["report"]["estimates"], y["report"]["estimates"], "{name}");
+    }
 }
