@@ -31,6 +31,14 @@ pub fn parse() -> args::Cli {
             .map(|id| id.to_string())
             .collect();
     }
+    if let (args::Command::Sweep(a), Some(("sweep", m))) = (&mut cli.command, matches.subcommand())
+    {
+        a.eval.given = m
+            .ids()
+            .filter(|id| m.value_source(id.as_str()) == Some(ValueSource::CommandLine))
+            .map(|id| id.to_string())
+            .collect();
+    }
     cli
 }
 
@@ -43,6 +51,7 @@ pub fn run(cli: args::Cli) -> ExitCode {
         args::Command::Batch(a) => commands::batch::run(a),
         args::Command::Merge(a) => commands::merge::run(a),
         args::Command::Export(a) => commands::export::run(a),
+        args::Command::Sweep(a) => commands::sweep::run(*a),
     };
     match result {
         Ok(code) => ExitCode::from(code),

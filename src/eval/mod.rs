@@ -7,6 +7,7 @@ pub mod extrinsics;
 pub mod inputs;
 pub mod overrides;
 pub mod preset;
+pub mod sweep;
 
 use rayon::prelude::*;
 

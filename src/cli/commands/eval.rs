@@ -8,12 +8,13 @@ use trajdrift::eval::config::{EvalConfig, LeverSpec, NamedInput, Platform};
 use trajdrift::eval::evaluate_with_inputs;
 use trajdrift::eval::preset::Preset;
 use trajdrift::metrics::lever::LeverCorrection;
+use trajdrift::plot::{PictureOutputs, PlotFormat};
 use trajdrift::report::{output::write_output, table};
 use trajdrift::sources::StampSource;
 
 use crate::cli::args::{
     parse_triple, text_options, EvalArgs, LeverCorrectionArg, OffsetMethodArg, PlatformArg,
-    StampArg,
+    PlotFormatArg, StampArg,
 };
 use crate::cli::progress::ReadProgress;
 use crate::cli::{EXIT_OK, EXIT_WARNING};
@@ -118,6 +119,34 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
     Ok((c, notes))
 }
 
+/// `--plot DIR`, `--plot-format`, `--html FILE`; refuses an output that is the recording.
+pub fn pictures_from_args(
+    a: &EvalArgs,
+    recording: Option<&std::path::Path>,
+) -> Result<PictureOutputs> {
+    let same = |p: &std::path::Path| {
+        recording.is_some_and(|r| {
+            std::fs::canonicalize(r)
+                .ok()
+                .is_some_and(|r| std::fs::canonicalize(p).ok() == Some(r))
+        })
+    };
+    if let Some(h) = a.html.as_deref().filter(|h| same(h)) {
+        return Err(anyhow!(
+            "--html {} is the recording; choose another file",
+            h.display()
+        ));
+    }
+    Ok(PictureOutputs {
+        plot_dir: a.plot.clone(),
+        format: Some(match a.plot_format {
+            PlotFormatArg::Svg => PlotFormat::Svg,
+            PlotFormatArg::Png => PlotFormat::Png,
+        }),
+        html: a.html.clone(),
+    })
+}
+
 /// Runs the command; returns the exit code.
 pub fn run(a: EvalArgs) -> Result<u8> {
     let (config, notes) = config_from_args(&a)?;
@@ -153,6 +182,12 @@ pub fn run(a: EvalArgs) -> Result<u8> {
                 done.copy.messages,
                 done.counts.values().sum::<u64>()
             );
+        }
+    }
+    let pictures = pictures_from_args(&a, config.recording.as_deref())?;
+    for path in pictures.write(&report, &inputs)? {
+        if !a.quiet {
+            eprintln!("wrote {}", path.display());
         }
     }
     let json_to_stdout = a.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
