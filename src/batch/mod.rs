@@ -8,3 +8,4 @@ pub mod manifest;
 pub mod run;
 pub mod shard;
 pub mod summary;
+pub mod summary_html;

@@ -270,7 +270,9 @@ impl Summary {
         json.push(b'\n');
         write_output(&dir.join("summary.json"), &json)?;
         write_output(&dir.join("summary.csv"), self.to_csv().as_bytes())?;
-        write_output(&dir.join("summary.md"), self.to_markdown().as_bytes())
+        write_output(&dir.join("summary.md"), self.to_markdown().as_bytes())?;
+        let html = super::summary_html::render(self, dir);
+        write_output(&dir.join("summary.html"), html.as_bytes())
     }
 }
 

@@ -342,6 +342,15 @@ pub struct BatchArgs {
     /// Run only shard I of N (1-based); `trajdrift merge` builds the summary of all shards.
     #[arg(long, value_name = "I/N")]
     pub shard: Option<String>,
+    /// Also write each mission's figures into DIR/<mission>_figures/.
+    #[arg(long)]
+    pub plot: bool,
+    /// Format of the --plot figures.
+    #[arg(long, value_enum, default_value = "svg")]
+    pub plot_format: PlotFormatArg,
+    /// Also write each mission's self-contained HTML report, DIR/<mission>.html (summary.html links it).
+    #[arg(long)]
+    pub html: bool,
     /// Print nothing but errors and warnings.
     #[arg(long, short)]
     pub quiet: bool,

@@ -124,14 +124,67 @@ fn top_view(
             .collect(),
         ..Default::default()
     };
+    let fit = display_fit(reference, aligned);
     for (ns, p) in aligned.stamps_ns.iter().zip(&aligned.positions) {
         let t = abs_s(*ns);
-        v.estimate.push((p.x, p.y, in_window(t)));
+        let (x, y) = fit(p);
+        v.estimate.push((x, y, in_window(t)));
         if excluded(t) {
-            v.excluded.push((p.x, p.y));
+            v.excluded.push((x, y));
         }
     }
     v
+}
+
+/// The rotation about z and translation that best lay the estimate (its own frame) onto the
+/// reference at the same times (2-D Kabsch, least squares) — for display only: Drift Error needs no
+/// spatial alignment, but a reader compares shapes best when they overlap.
+fn display_fit(reference: &Loaded, aligned: &Trajectory) -> impl Fn(&Vector3<f64>) -> (f64, f64) {
+    let r = &reference.trajectory;
+    let pairs: Vec<((f64, f64), (f64, f64))> = super::style::decimate(aligned.len(), 5000)
+        .into_iter()
+        .filter_map(|i| {
+            let t = aligned.stamps_ns[i];
+            let j = r.stamps_ns.partition_point(|&x| x < t);
+            let k = [j.saturating_sub(1), j]
+                .into_iter()
+                .filter(|&k| k < r.len())
+                .min_by_key(|&k| (r.stamps_ns[k] - t).abs())?;
+            // Pairs further apart in time than 0.5 s (a gap in the reference) are left out.
+            ((r.stamps_ns[k] - t).abs() < 500_000_000).then(|| {
+                let (e, q) = (aligned.positions[i], r.positions[k]);
+                ((e.x, e.y), (q.x, q.y))
+            })
+        })
+        .collect();
+    let n = pairs.len().max(1) as f64;
+    let (mut ce, mut cr) = ((0.0, 0.0), (0.0, 0.0));
+    for ((ex, ey), (rx, ry)) in &pairs {
+        ce = (ce.0 + ex / n, ce.1 + ey / n);
+        cr = (cr.0 + rx / n, cr.1 + ry / n);
+    }
+    // The optimal angle of a 2-D rotation: atan2 of the cross and dot sums of the centred pairs.
+    let (mut cross, mut dot) = (0.0, 0.0);
+    for ((ex, ey), (rx, ry)) in &pairs {
+        let (a, b) = ((ex - ce.0, ey - ce.1), (rx - cr.0, ry - cr.1));
+        cross += a.0 * b.1 - a.1 * b.0;
+        dot += a.0 * b.0 + a.1 * b.1;
+    }
+    let th = if pairs.len() >= 3 {
+        cross.atan2(dot)
+    } else {
+        0.0
+    };
+    let (c, s) = (th.cos(), th.sin());
+    let (ce, cr) = if pairs.len() >= 3 {
+        (ce, cr)
+    } else {
+        ((0.0, 0.0), (0.0, 0.0))
+    };
+    move |p: &Vector3<f64>| {
+        let (x, y) = (p.x - ce.0, p.y - ce.1);
+        (c * x - s * y + cr.0, s * x + c * y + cr.1)
+    }
 }
 
 /// Distance along the reference (ε-decimated, so noise does not inflate it) at each sample.

@@ -2,6 +2,7 @@
 //! so that it can be drawn from a report, from a sweep or from a test. [`mission_figures`] builds them
 //! all from a report and the trajectories it was computed from.
 
+pub mod de_distribution;
 pub mod drift_error;
 pub mod mission;
 pub mod offset_curves;
@@ -31,6 +32,7 @@ pub enum FigureData {
     OffsetProfile(offset_profile::OffsetProfile),
     Speed(speed::SpeedFit),
     Sweep(sweep::SweepFigure),
+    DeDistribution(de_distribution::DeDistribution),
 }
 
 impl style::Draw for FigureData {
@@ -42,6 +44,7 @@ impl style::Draw for FigureData {
             FigureData::OffsetProfile(f) => f.draw(root),
             FigureData::Speed(f) => f.draw(root),
             FigureData::Sweep(f) => f.draw(root),
+            FigureData::DeDistribution(f) => f.draw(root),
         }
     }
 }

@@ -1,6 +1,8 @@
 //! Top view: the reference and the aligned estimate in the horizontal plane, the estimate coloured by
 //! the Drift Error of the window it lies in, samples in excluded intervals (turns in place, gaps)
-//! marked. Equal scale on both axes, so the shape is true.
+//! marked. Equal scale on both axes, so the shape is true. The estimate is drawn after a rigid 2-D
+//! fit onto the reference (display only; the legend says so). The estimate is drawn after a rigid 2-D
+//! fit onto the reference (display only; the legend says so).
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -113,7 +115,7 @@ impl Draw for TopView {
             }))
             .map_err(plot_err)?
             .label(format!(
-                "aligned estimate (colour: DE, w = {} m)",
+                "aligned estimate, 2-D fit onto the reference (colour: DE, w = {} m)",
                 self.window_m
             ))
             .legend(|(x, y)| Circle::new((x + 10, y), 4, viridis(0.5).filled()));
