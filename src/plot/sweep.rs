@@ -159,7 +159,7 @@ impl Draw for SweepFigure {
             .label_font(label_font())
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperLeft)
+            .position(SeriesLabelPosition::LowerRight)
             .draw()
             .map_err(plot_err)
     }

@@ -106,19 +106,21 @@ impl Draw for TopView {
                 .map(|i| self.estimate[i])
                 .collect();
         chart
-            .draw_series(est.iter().map(|&(x, y, de)| {
+            .draw_series(runs(&est).into_iter().map(|(de, pts)| {
                 let c = match de {
-                    Some(d) => viridis(d / top).filled(),
-                    None => RGBColor(200, 200, 200).filled(),
+                    Some(d) => viridis(d / top),
+                    None => RGBColor(200, 200, 200),
                 };
-                Circle::new((x, y), 2, c)
+                PathElement::new(pts, c.stroke_width(4))
             }))
             .map_err(plot_err)?
             .label(format!(
                 "aligned estimate, 2-D fit onto the reference (colour: DE, w = {} m)",
                 self.window_m
             ))
-            .legend(|(x, y)| Circle::new((x + 10, y), 4, viridis(0.5).filled()));
+            .legend(|(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], viridis(0.5).stroke_width(4))
+            });
         let red = RGBColor(213, 94, 0);
         let ex: Vec<(f64, f64)> = super::style::decimate(self.excluded.len(), MAX_POINTS / 4)
             .into_iter()
@@ -139,6 +141,23 @@ impl Draw for TopView {
             .map_err(plot_err)?;
         colour_bar(&right, top)
     }
+}
+
+/// Consecutive points of one window as one polyline (a few hundred paths instead of thousands of
+/// dots); each run starts at the previous run's last point so the line is unbroken.
+fn runs(est: &[(f64, f64, Option<f64>)]) -> Vec<(Option<f64>, Vec<(f64, f64)>)> {
+    let mut out: Vec<(Option<f64>, Vec<(f64, f64)>)> = Vec::new();
+    for &(x, y, de) in est {
+        match out.last_mut() {
+            Some((d, pts)) if *d == de => pts.push((x, y)),
+            Some((_, pts)) => {
+                let start = pts[pts.len() - 1];
+                out.push((de, vec![start, (x, y)]));
+            }
+            None => out.push((de, vec![(x, y)])),
+        }
+    }
+    out
 }
 
 /// A vertical viridis bar from DE 0 to `top` with five labels.
