@@ -381,3 +381,35 @@ fn png_figures_use_the_built_in_font() {
         assert_eq!(&bytes[1..4], b"PNG", "{name}");
     }
 }
+
+#[test]
+fn sweep_usage_errors_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    for values in ["1:0:1", "0.1,x", "0:1"] {
+        let o = bin()
+            .args([
+                "sweep",
+                "none.mcap",
+                "--reference",
+                "/r",
+                "--estimate",
+                "/e",
+            ])
+            .args([
+                "--param",
+                "eps-min",
+                "--values",
+                values,
+                "--out",
+                s(dir.path()),
+            ])
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "--values {values}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("--values") && err.lines().count() == 1,
+            "{err}"
+        );
+    }
+}

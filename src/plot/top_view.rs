@@ -143,10 +143,13 @@ impl Draw for TopView {
     }
 }
 
+/// One window's stretch of the estimate: its DE and its points.
+type Run = (Option<f64>, Vec<(f64, f64)>);
+
 /// Consecutive points of one window as one polyline (a few hundred paths instead of thousands of
 /// dots); each run starts at the previous run's last point so the line is unbroken.
-fn runs(est: &[(f64, f64, Option<f64>)]) -> Vec<(Option<f64>, Vec<(f64, f64)>)> {
-    let mut out: Vec<(Option<f64>, Vec<(f64, f64)>)> = Vec::new();
+fn runs(est: &[(f64, f64, Option<f64>)]) -> Vec<Run> {
+    let mut out: Vec<Run> = Vec::new();
     for &(x, y, de) in est {
         match out.last_mut() {
             Some((d, pts)) if *d == de => pts.push((x, y)),
