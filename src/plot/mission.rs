@@ -316,8 +316,13 @@ fn speed_fit(
             .map(|s| (s.t, s.speed))
             .collect()
     };
+    let reference_t = reference.trajectory.times_s(t0_ns);
+    // Thinning to MAX_POINTS spaces the points by span/MAX_POINTS; a gap must be longer than that.
+    let span =
+        reference_t.last().copied().unwrap_or(0.0) - reference_t.first().copied().unwrap_or(0.0);
     SpeedFit {
         title,
+        max_gap_s: p.dt_max_s.max(3.0 * span / super::style::MAX_POINTS as f64),
         reference: profile(
             &reference.trajectory.times_s(t0_ns),
             &reference.trajectory.positions,

@@ -15,6 +15,24 @@ pub struct SpeedFit {
     pub title: String,
     pub reference: Vec<(f64, f64)>,
     pub estimate: Vec<(f64, f64)>,
+    /// A time step longer than this (after thinning) is a gap: the line is broken there, seconds.
+    pub max_gap_s: f64,
+}
+
+/// The pieces of `p` between time gaps longer than `gap` (a GNSS outage is not drawn as a ramp).
+fn split_at_gaps(p: &[(f64, f64)], gap: f64) -> Vec<&[(f64, f64)]> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    for i in 1..p.len() {
+        if p[i].0 - p[i - 1].0 > gap {
+            out.push(&p[start..i]);
+            start = i;
+        }
+    }
+    if start < p.len() {
+        out.push(&p[start..]);
+    }
+    out
 }
 
 impl Draw for SpeedFit {
@@ -47,13 +65,16 @@ impl Draw for SpeedFit {
                 .into_iter()
                 .map(|k| pts[k])
                 .collect();
-            chart
-                .draw_series(LineSeries::new(p, c.stroke_width(w)))
-                .map_err(plot_err)?
-                .label(name)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w))
-                });
+            for (k, piece) in split_at_gaps(&p, self.max_gap_s).into_iter().enumerate() {
+                let drawn = chart
+                    .draw_series(LineSeries::new(piece.iter().copied(), c.stroke_width(w)))
+                    .map_err(plot_err)?;
+                if k == 0 {
+                    drawn.label(name).legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w))
+                    });
+                }
+            }
         }
         chart
             .configure_series_labels()

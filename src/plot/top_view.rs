@@ -121,6 +121,14 @@ impl Draw for TopView {
             .legend(|(x, y)| {
                 PathElement::new(vec![(x, y), (x + 20, y)], viridis(0.5).stroke_width(4))
             });
+        let pale = RGBColor(200, 200, 200);
+        chart
+            .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
+            .map_err(plot_err)?
+            .label("estimate in no window (gap, standstill)")
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], pale.stroke_width(4))
+            });
         let red = RGBColor(213, 94, 0);
         let ex: Vec<(f64, f64)> = super::style::decimate(self.excluded.len(), MAX_POINTS / 4)
             .into_iter()
@@ -168,11 +176,12 @@ fn colour_bar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, top: f64) -> Re
     let (_, h) = area.dim_in_pixel();
     let (y0, y1) = (60i32, h as i32 - 60);
     let x = 10i32;
-    let steps = 100;
+    let steps = 100i32;
     for k in 0..steps {
         let f = k as f64 / steps as f64;
-        let ya = y1 - ((y1 - y0) as f64 * (f + 1.0 / steps as f64)) as i32;
-        let yb = y1 - ((y1 - y0) as f64 * f) as i32;
+        // Shared integer edges: step k ends where step k + 1 begins, no seam.
+        let edge = |k: i32| y1 - ((y1 - y0) as f64 * k as f64 / steps as f64).round() as i32;
+        let (ya, yb) = (edge(k + 1), edge(k));
         area.draw(&Rectangle::new(
             [(x, ya), (x + 24, yb)],
             viridis(f).filled(),
