@@ -413,3 +413,56 @@ fn sweep_usage_errors_exit_2() {
         );
     }
 }
+
+#[test]
+fn batch_writes_mission_pages_and_a_summary_html() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in");
+    std::fs::create_dir(&input).unwrap();
+    for m in ["lever_arm", "straight"] {
+        let src = common::mission(&shared, m).join("mission.mcap");
+        std::os::unix::fs::symlink(src, input.join(format!("{m}.mcap"))).unwrap();
+    }
+    let out = dir.path().join("out");
+    run(&[
+        "batch",
+        s(&input),
+        "--reference",
+        "/reference/position",
+        "--estimate",
+        "/estimate/odom",
+        "--out",
+        s(&out),
+        "--plot",
+        "--html",
+        "--jobs",
+        "1",
+        "-q",
+    ]);
+    let summary = std::fs::read_to_string(out.join("summary.html")).unwrap();
+    for m in ["lever_arm", "straight"] {
+        assert!(
+            summary.contains(&format!("href=\"{m}.html\"")),
+            "{m} not linked"
+        );
+        let page = std::fs::read_to_string(out.join(format!("{m}.html"))).unwrap();
+        assert_eq!(page.matches("<svg").count(), FIGURES.len(), "{m}.html");
+        for name in FIGURES {
+            let f = out.join(format!("{m}_figures/estimate_odom_{name}.svg"));
+            assert!(f.is_file(), "{} missing", f.display());
+        }
+    }
+    assert_eq!(
+        summary.matches("<svg").count(),
+        1,
+        "the DE distribution inline"
+    );
+    let remote: Vec<String> = references(&summary)
+        .into_iter()
+        .filter(|r| r.to_ascii_lowercase().starts_with("http"))
+        .collect();
+    assert!(remote.is_empty(), "{remote:?}");
+}
