@@ -9,7 +9,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::style::{label_font, padded_range, plot_err, series_color, title_font, Draw};
+use super::style::{legend, padded_range, plot_err, series_color, xy_chart, Chart, Draw};
 use crate::error::Result;
 use crate::report::json::TimeOffsetReport;
 
@@ -123,21 +123,28 @@ impl Draw for OffsetProfile {
             y0.min(0.5 * (y0 + y1) - 0.01),
             y1.max(0.5 * (y0 + y1) + 0.01),
         );
-        let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, title_font())
-            .margin(10)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(plot_err)?;
-        chart
-            .configure_mesh()
-            .x_desc("time on the reference clock (s from its start)")
-            .y_desc("time offset Δt (s)")
-            .label_style(label_font())
-            .axis_desc_style(label_font())
-            .draw()
-            .map_err(plot_err)?;
+        let mut chart = xy_chart(
+            root,
+            &self.title,
+            ((x0, x1), (y0, y1)),
+            (
+                "time on the reference clock (s from its start)",
+                "time offset Δt (s)",
+            ),
+        )?;
+        self.draw_measurements(&mut chart)?;
+        self.draw_model(&mut chart)?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight)
+    }
+}
+
+impl OffsetProfile {
+    /// The σ band and the measured points with their ±σ bars.
+    fn draw_measurements<'a, DB: DrawingBackend + 'a>(
+        &self,
+        chart: &mut Chart<'a, DB>,
+    ) -> Result<()> {
+        let sig = |s: Option<f64>| s.unwrap_or(0.0);
         let c = series_color(0, 2);
         if self.points.len() >= 2 {
             let mut band: Vec<(f64, f64)> = self
@@ -174,6 +181,11 @@ impl Draw for OffsetProfile {
             .map_err(plot_err)?
             .label("Δt measured on a piece of the mission (±σ)")
             .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+        Ok(())
+    }
+
+    /// The chosen model, one line per segment.
+    fn draw_model<'a, DB: DrawingBackend + 'a>(&self, chart: &mut Chart<'a, DB>) -> Result<()> {
         let m = series_color(1, 2);
         let model = self.model.as_str();
         for (k, s) in self.segments.iter().enumerate() {
@@ -191,13 +203,6 @@ impl Draw for OffsetProfile {
                     });
             }
         }
-        chart
-            .configure_series_labels()
-            .label_font(label_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(plot_err)
+        Ok(())
     }
 }

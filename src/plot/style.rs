@@ -7,6 +7,7 @@
 
 use std::sync::Once;
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -123,6 +124,49 @@ pub fn title_font() -> TextStyle<'static> {
 /// Text style of axis labels, ticks and legends.
 pub fn label_font() -> TextStyle<'static> {
     (FAMILY, 15).into_font().color(&BLACK)
+}
+
+/// A chart on f64 axes.
+pub type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// A titled chart over `x` × `y` with labelled axes, the frame every figure shares.
+pub fn xy_chart<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    (x, y): ((f64, f64), (f64, f64)),
+    (x_desc, y_desc): (&str, &str),
+) -> Result<Chart<'a, DB>> {
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, title_font())
+        .margin(10)
+        .x_label_area_size(50)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x.0..x.1, y.0..y.1)
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .label_style(label_font())
+        .axis_desc_style(label_font())
+        .draw()
+        .map_err(plot_err)?;
+    Ok(chart)
+}
+
+/// The legend box of `chart` at `pos`.
+pub fn legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut Chart<'a, DB>,
+    pos: SeriesLabelPosition,
+) -> Result<()> {
+    chart
+        .configure_series_labels()
+        .label_font(label_font())
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(pos)
+        .draw()
+        .map_err(plot_err)
 }
 
 /// Indices of at most `max` of `n` items, evenly spaced, the first and last always kept.

@@ -2,6 +2,8 @@
 //! the right against the swept value — the paper's ε_min figure; for a time-offset sweep, each
 //! method's Δt as a vertical line.
 
+use plotters::chart::DualCoordChartContext;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -88,21 +90,7 @@ impl Draw for SweepFigure {
             .build_cartesian_2d(x0..x1, 0.0..y1)
             .map_err(plot_err)?
             .set_secondary_coord(x0..x1, 0.0..1.0);
-        chart
-            .configure_mesh()
-            .x_desc(self.x_label.as_str())
-            .y_desc("Drift Error (–)")
-            .label_style(label_font())
-            .axis_desc_style(label_font())
-            .draw()
-            .map_err(plot_err)?;
-        chart
-            .configure_secondary_axes()
-            .y_desc("discarded fraction of the path (dotted)")
-            .label_style(label_font())
-            .axis_desc_style(label_font())
-            .draw()
-            .map_err(plot_err)?;
+        self.axes(&mut chart)?;
         let n = self.series.len();
         for (i, s) in self.series.iter().enumerate() {
             let c = series_color(i, n);
@@ -134,6 +122,53 @@ impl Draw for SweepFigure {
                 ))
                 .legend(move |(x, y)| Circle::new((x + 10, y), 2, c.filled()));
         }
+        self.draw_markers(&mut chart, y1)?;
+        chart
+            .configure_series_labels()
+            .label_font(label_font())
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::LowerRight)
+            .draw()
+            .map_err(plot_err)
+    }
+}
+
+/// A chart with a second y axis, both on f64.
+type Dual<'a, DB> = DualCoordChartContext<
+    'a,
+    DB,
+    Cartesian2d<RangedCoordf64, RangedCoordf64>,
+    Cartesian2d<RangedCoordf64, RangedCoordf64>,
+>;
+
+impl SweepFigure {
+    /// Both y axes: DE on the left, the discarded fraction on the right.
+    fn axes<'a, DB: DrawingBackend + 'a>(&self, chart: &mut Dual<'a, DB>) -> Result<()> {
+        chart
+            .configure_mesh()
+            .x_desc(self.x_label.as_str())
+            .y_desc("Drift Error (–)")
+            .label_style(label_font())
+            .axis_desc_style(label_font())
+            .draw()
+            .map_err(plot_err)?;
+        chart
+            .configure_secondary_axes()
+            .y_desc("discarded fraction of the path (dotted)")
+            .label_style(label_font())
+            .axis_desc_style(label_font())
+            .draw()
+            .map_err(plot_err)?;
+        Ok(())
+    }
+
+    /// Each method's Δt as a vertical line (time-offset sweeps).
+    fn draw_markers<'a, DB: DrawingBackend + 'a>(
+        &self,
+        chart: &mut Dual<'a, DB>,
+        y1: f64,
+    ) -> Result<()> {
         let red = RGBColor(213, 94, 0);
         for (k, (label, x)) in self.markers.iter().enumerate() {
             let col = if k == 0 {
@@ -154,13 +189,6 @@ impl Draw for SweepFigure {
                     PathElement::new(vec![(a, b - 6), (a, b + 6)], col.stroke_width(2))
                 });
         }
-        chart
-            .configure_series_labels()
-            .label_font(label_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()
-            .map_err(plot_err)
+        Ok(())
     }
 }

@@ -8,7 +8,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::style::{
-    label_font, padded_range, plot_err, title_font, viridis, Draw, FAMILY, MAX_POINTS,
+    label_font, legend, padded_range, plot_err, title_font, viridis, Chart, Draw, FAMILY,
+    MAX_POINTS,
 };
 use crate::error::Result;
 
@@ -99,6 +100,16 @@ impl Draw for TopView {
             .legend(move |(x, y)| {
                 PathElement::new(vec![(x, y), (x + 20, y)], grey.stroke_width(2))
             });
+        let top = self.draw_estimate(&mut chart)?;
+        legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+        colour_bar(&right, top)
+    }
+}
+
+impl TopView {
+    /// The estimate coloured by DE, the no-window stretches and the excluded samples; returns the
+    /// colour scale's top.
+    fn draw_estimate<'a, DB: DrawingBackend + 'a>(&self, chart: &mut Chart<'a, DB>) -> Result<f64> {
         let top = self.de_top();
         let est: Vec<(f64, f64, Option<f64>)> =
             super::style::decimate(self.estimate.len(), MAX_POINTS)
@@ -139,15 +150,7 @@ impl Draw for TopView {
             .map_err(plot_err)?
             .label("excluded (turn in place, gap)")
             .legend(move |(x, y)| Cross::new((x + 10, y), 4, red.stroke_width(1)));
-        chart
-            .configure_series_labels()
-            .label_font(label_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()
-            .map_err(plot_err)?;
-        colour_bar(&right, top)
+        Ok(top)
     }
 }
 
