@@ -1,6 +1,6 @@
 //! Parameter sweeps (`trajdrift sweep`): the evaluation re-run over one parameter's values, in
-//! parallel (rayon), each value a whole `eval` with that one flag changed — so a row of the sweep
-//! equals the single run at that value. This is the paper's ε_min figure (DE and the discarded share
+//! parallel (rayon), each value a whole `eval` with that one flag changed on the trajectories read
+//! once — so a row of the sweep equals the single run at that value. This is the paper's ε_min figure (DE and the discarded share
 //! against ε) and its time-shift figure (DE against an applied Δt, each method's answer marked).
 //!
 //! What a row holds is computed by [`row_metrics`] alone: a new metric (APE, RPE) is one field there
@@ -10,8 +10,10 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::eval::config::EvalConfig;
-use crate::eval::evaluate;
+use crate::eval::evaluate_loaded;
+use crate::eval::inputs::load;
 use crate::report::json::{DriftErrorReport, EstimateReport};
+use crate::sources::Progress;
 
 /// The parameter a sweep varies (each is the `eval` flag of the same name).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -177,12 +179,17 @@ pub fn run_sweep(
     base: &EvalConfig,
     param: SweepParam,
     values: &[f64],
+    read: Progress<'_>,
     on_done: &(dyn Fn() + Sync),
 ) -> Result<Sweep> {
+    base.validate()?;
+    // Read once: no swept parameter changes what is read, only what is computed from it.
+    let inputs = load(base, read)?;
+    let evaluate = |c: &EvalConfig| evaluate_loaded(c, inputs.clone()).map(|(r, _)| r);
     let runs: Vec<(f64, Result<Vec<SweepRow>>)> = values
         .par_iter()
         .map(|&v| {
-            let r = evaluate(&param.apply(base, v), &|_| {}).map(|report| {
+            let r = evaluate(&param.apply(base, v)).map(|report| {
                 report
                     .estimates
                     .iter()
@@ -223,7 +230,7 @@ pub fn run_sweep(
     let method_offsets = if param == SweepParam::TimeOffset {
         let mut searched = base.clone();
         searched.time_offset_s = None;
-        evaluate(&searched, &|_| {})?
+        evaluate(&searched)?
             .estimates
             .iter()
             .flat_map(|e| {

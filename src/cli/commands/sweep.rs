@@ -28,9 +28,14 @@ fn param(p: SweepParamArg) -> SweepParam {
 /// Runs the command; returns the exit code.
 pub fn run(a: SweepArgs) -> Result<u8> {
     let e = &a.eval;
-    if e.annotate.is_some() || e.export_aligned.is_some() || e.plot.is_some() || e.html.is_some() {
+    if e.annotate.is_some()
+        || e.export_aligned.is_some()
+        || e.plot.is_some()
+        || e.html.is_some()
+        || e.json.is_some()
+    {
         return Err(anyhow!(trajdrift::Error::InvalidArgument(
-            "sweep writes DIR/sweep.csv and DIR/sweep.svg only: drop --annotate, --export-aligned, --plot and --html".into()
+            "sweep writes DIR/sweep.csv and DIR/sweep.svg only: drop --annotate, --export-aligned, --plot, --html and --json".into()
         )));
     }
     let (config, notes) = config_from_args(e)?;
@@ -43,8 +48,18 @@ pub fn run(a: SweepArgs) -> Result<u8> {
     let values = parse_values(&a.values)?;
     std::fs::create_dir_all(&a.out)
         .map_err(|err| anyhow!("cannot create {}: {err}", a.out.display()))?;
+    let total = config
+        .recording
+        .as_ref()
+        .and_then(|p| std::fs::metadata(p).ok())
+        .map_or(0, |m| m.len());
+    let reading = ReadProgress::new(total, e.quiet);
     let progress = ReadProgress::counting(values.len() as u64, e.quiet, param.as_str());
-    let sweep = run_sweep(&config, param, &values, &|| progress.inc());
+    let sweep = run_sweep(&config, param, &values, &|b| reading.update(b), &|| {
+        reading.finish();
+        progress.inc()
+    });
+    reading.finish();
     progress.finish();
     let sweep = sweep?;
     let csv = sweep.to_csv()?;
