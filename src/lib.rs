@@ -17,3 +17,4 @@ pub use error::{Error, Result};
 pub use trajectory::Trajectory;
 pub mod annotate;
 pub mod batch;
+pub mod plot;

@@ -9,3 +9,4 @@ pub mod manifest;
 pub mod run;
 pub mod shard;
 pub mod summary;
+pub mod summary_html;

@@ -31,6 +31,27 @@ pub struct BatchOptions {
     /// `--annotate`) instead of running it again.
     pub skip_existing: bool,
     pub shard: Option<Shard>,
+    /// Per-mission figures (`<mission>_figures/`, in this format) and/or `<mission>.html`.
+    pub pictures: MissionPictures,
+}
+
+/// What pictures each mission gets (`batch --plot [--plot-format F] --html`).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct MissionPictures {
+    pub plot: Option<crate::plot::PlotFormat>,
+    pub html: bool,
+}
+
+impl MissionPictures {
+    fn outputs(&self, out_dir: &Path, mission: &str) -> crate::plot::PictureOutputs {
+        crate::plot::PictureOutputs {
+            plot_dir: self
+                .plot
+                .map(|_| out_dir.join(format!("{mission}_figures"))),
+            format: self.plot,
+            html: self.html.then(|| out_dir.join(format!("{mission}.html"))),
+        }
+    }
 }
 
 /// What a running batch reports, for a progress display.
@@ -157,6 +178,9 @@ fn run_mission(
                 bytes: b,
             })
         })?;
+        opts.pictures
+            .outputs(&opts.out_dir, &m.name)
+            .write(&report, &inputs)?;
         if opts.annotate {
             annotate(
                 &m.config,

@@ -276,7 +276,9 @@ impl Summary {
         json.push(b'\n');
         write_output(&path("json"), &json)?;
         write_output(&path("csv"), self.to_csv().as_bytes())?;
-        write_output(&path("md"), self.to_markdown().as_bytes())
+        write_output(&path("md"), self.to_markdown().as_bytes())?;
+        let html = super::summary_html::render(self, dir);
+        write_output(&path("html"), html.as_bytes())
     }
 }
 

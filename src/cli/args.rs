@@ -29,6 +29,8 @@ pub enum Command {
     Merge(MergeArgs),
     /// Write one topic (or a text trajectory) as TUM or CSV text, e.g. for evo.
     Export(ExportArgs),
+    /// Re-run the evaluation over one parameter's values: DIR/sweep.csv and DIR/sweep.svg.
+    Sweep(Box<SweepArgs>),
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -122,6 +124,15 @@ pub struct EvalArgs {
     pub preset: Option<String>,
     #[command(flatten)]
     pub text: TextArgs,
+    /// Write the figures (top view, Drift Error, offset search and profile, speed) into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
+    /// Format of the --plot figures.
+    #[arg(long, value_enum, default_value = "svg")]
+    pub plot_format: PlotFormatArg,
+    /// Write a self-contained HTML report (figures inline, nothing loaded from the network) to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub html: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -250,6 +261,15 @@ pub struct BatchArgs {
     /// default: the TRAJDRIFT_SHARDS variable.
     #[arg(long, value_name = "N")]
     pub shards: Option<usize>,
+    /// Also write each mission's figures into DIR/<mission>_figures/.
+    #[arg(long)]
+    pub plot: bool,
+    /// Format of the --plot figures.
+    #[arg(long, value_enum, default_value = "svg")]
+    pub plot_format: PlotFormatArg,
+    /// Also write each mission's self-contained HTML report, DIR/<mission>.html (summary.html links it).
+    #[arg(long)]
+    pub html: bool,
     /// Print nothing but errors and warnings.
     #[arg(long, short)]
     pub quiet: bool,
@@ -285,4 +305,42 @@ pub fn text_options(a: &TextArgs) -> trajdrift::Result<trajdrift::sources::text:
             .transpose()?,
         kitti_times: a.kitti_times.clone(),
     })
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum PlotFormatArg {
+    Svg,
+    /// bitmap, drawn with the font built into the binary
+    Png,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum SweepParamArg {
+    /// --eps-min (both ε, the paper's ε_min)
+    EpsMin,
+    CurvatureEps,
+    PathEps,
+    /// --window (one size per value)
+    Window,
+    LeverArm,
+    Overlap,
+    /// --time-offset: the applied Δt (no search); each method's Δt is marked
+    TimeOffset,
+}
+
+/// `trajdrift sweep`: every `eval` flag, plus the parameter, its values and the output folder.
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct SweepArgs {
+    /// The parameter to vary.
+    #[arg(long, value_enum)]
+    pub param: SweepParamArg,
+    /// Its values: a list (0.05,0.1,0.2) or a range A:B:STEP (0.05:1:0.05).
+    #[arg(long, value_name = "LIST|A:B:STEP", allow_hyphen_values = true)]
+    pub values: String,
+    /// Output folder for sweep.csv and sweep.svg.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub eval: EvalArgs,
 }

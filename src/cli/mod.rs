@@ -32,6 +32,7 @@ pub fn run(cli: args::Cli) -> ExitCode {
         args::Command::Batch(a) => commands::batch::run(*a),
         args::Command::Merge(a) => commands::merge::run(a),
         args::Command::Export(a) => commands::export::run(a),
+        args::Command::Sweep(a) => commands::sweep::run(*a),
     };
     match result {
         Ok(code) => ExitCode::from(code),

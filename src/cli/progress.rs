@@ -31,6 +31,20 @@ impl ReadProgress {
         }
     }
 
+    /// A bar counting `total` items (e.g. a sweep's values), labelled `what`; inert like [`Self::new`].
+    pub fn counting(total: u64, quiet: bool, what: &str) -> Self {
+        let p = ReadProgress::new(total, quiet);
+        if let Some(bar) = &p.bar {
+            if let Ok(style) =
+                ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} eta {eta}")
+            {
+                bar.set_style(style.progress_chars("=> "));
+            }
+            bar.set_message(what.to_string());
+        }
+        p
+    }
+
     /// Records `bytes` read so far.
     pub fn update(&self, bytes: u64) {
         if let Some(bar) = &self.bar {
@@ -38,6 +52,16 @@ impl ReadProgress {
                 bar.set_draw_target(ProgressDrawTarget::stderr());
             }
             bar.set_position(bytes);
+        }
+    }
+
+    /// Counts one more item done (any thread).
+    pub fn inc(&self) {
+        if let Some(bar) = &self.bar {
+            if bar.is_hidden() && self.start.elapsed() > Duration::from_secs(1) {
+                bar.set_draw_target(ProgressDrawTarget::stderr());
+            }
+            bar.inc(1);
         }
     }
 

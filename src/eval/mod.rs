@@ -7,6 +7,7 @@ pub mod extrinsics;
 pub mod inputs;
 pub mod parameters;
 pub mod preset;
+pub mod sweep;
 
 use rayon::prelude::*;
 
@@ -40,7 +41,14 @@ pub fn evaluate_with_inputs(
     progress: Progress<'_>,
 ) -> Result<(Report, Inputs)> {
     config.validate()?;
-    let mut inputs = load(config, progress)?;
+    let inputs = load(config, progress)?;
+    evaluate_loaded(config, inputs)
+}
+
+/// The evaluation of inputs already read with [`load`] for `config` (a sweep reads the recording once
+/// and evaluates it at many parameter values; none of those change what is read).
+pub fn evaluate_loaded(config: &EvalConfig, mut inputs: Inputs) -> Result<(Report, Inputs)> {
+    config.validate()?;
     let levers = extrinsics::apply_levers(&inputs.reference, &mut inputs.estimates)?;
     let reference = &mut inputs.reference;
     let t0_ns = reference.trajectory.stamps_ns.first().copied().unwrap_or(0);

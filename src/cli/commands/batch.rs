@@ -3,10 +3,10 @@
 use anyhow::{anyhow, Result};
 
 use trajdrift::batch::manifest::{FolderRequest, Manifest};
-use trajdrift::batch::run::{run_batch, BatchOptions};
+use trajdrift::batch::run::{run_batch, BatchOptions, MissionPictures};
 use trajdrift::batch::shard::Shard;
 
-use crate::cli::args::BatchArgs;
+use crate::cli::args::{BatchArgs, PlotFormatArg};
 use crate::cli::batch_progress::BatchBars;
 
 /// Runs the command; returns the exit code (1 when a mission failed, else 3 when an offset was weak).
@@ -59,6 +59,13 @@ pub fn run(a: BatchArgs) -> Result<u8> {
         force: a.force,
         skip_existing: a.skip_existing,
         shard,
+        pictures: MissionPictures {
+            plot: a.plot.then_some(match a.plot_format {
+                PlotFormatArg::Svg => trajdrift::plot::PlotFormat::Svg,
+                PlotFormatArg::Png => trajdrift::plot::PlotFormat::Png,
+            }),
+            html: a.html,
+        },
     };
     let bars = BatchBars::new(a.quiet);
     let outcome = run_batch(&manifest, &opts, &|e| bars.event(e));

@@ -7,9 +7,10 @@ use trajdrift::eval::config::{EvalConfig, LeverSpec, NamedInput};
 use trajdrift::eval::evaluate_with_inputs;
 use trajdrift::eval::parameters::Parameters;
 use trajdrift::eval::preset::Preset;
+use trajdrift::plot::{PictureOutputs, PlotFormat};
 use trajdrift::report::{output::write_output, table};
 
-use crate::cli::args::{text_options, EvalArgs};
+use crate::cli::args::{text_options, EvalArgs, PlotFormatArg};
 use crate::cli::progress::ReadProgress;
 use crate::cli::{EXIT_OK, EXIT_WARNING};
 
@@ -71,6 +72,34 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
     Ok((c, notes))
 }
 
+/// `--plot DIR`, `--plot-format`, `--html FILE`; refuses an output that is the recording.
+pub fn pictures_from_args(
+    a: &EvalArgs,
+    recording: Option<&std::path::Path>,
+) -> Result<PictureOutputs> {
+    let same = |p: &std::path::Path| {
+        recording.is_some_and(|r| {
+            std::fs::canonicalize(r)
+                .ok()
+                .is_some_and(|r| std::fs::canonicalize(p).ok() == Some(r))
+        })
+    };
+    if let Some(h) = a.html.as_deref().filter(|h| same(h)) {
+        return Err(anyhow!(
+            "--html {} is the recording; choose another file",
+            h.display()
+        ));
+    }
+    Ok(PictureOutputs {
+        plot_dir: a.plot.clone(),
+        format: Some(match a.plot_format {
+            PlotFormatArg::Svg => PlotFormat::Svg,
+            PlotFormatArg::Png => PlotFormat::Png,
+        }),
+        html: a.html.clone(),
+    })
+}
+
 /// Runs the command; returns the exit code.
 pub fn run(a: EvalArgs) -> Result<u8> {
     let (config, notes) = config_from_args(&a)?;
@@ -106,6 +135,12 @@ pub fn run(a: EvalArgs) -> Result<u8> {
                 done.copy.messages,
                 done.counts.values().sum::<u64>()
             );
+        }
+    }
+    let pictures = pictures_from_args(&a, config.recording.as_deref())?;
+    for path in pictures.write(&report, &inputs)? {
+        if !a.quiet {
+            eprintln!("wrote {}", path.display());
         }
     }
     let json_to_stdout = a.json.as_deref().is_some_and(|p| p.as_os_str() == "-");

@@ -5,4 +5,5 @@ pub mod eval;
 pub mod export;
 pub mod merge;
 pub mod simulate;
+pub mod sweep;
 pub mod topics;

@@ -1,0 +1,326 @@
+//! Parameter sweeps (`trajdrift sweep`): the evaluation re-run over one parameter's values, in
+//! parallel (rayon), each value a whole `eval` with that one flag changed on the trajectories read
+//! once — so a row of the sweep equals the single run at that value. This is the paper's ε_min figure (DE and the discarded share
+//! against ε) and its time-shift figure (DE against an applied Δt, each method's answer marked).
+//!
+//! What a row holds is computed by [`row_metrics`] alone: a new metric (APE, RPE) is one field there
+//! and one CSV column in [`Sweep::to_csv`].
+
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::eval::config::EvalConfig;
+use crate::eval::evaluate_loaded;
+use crate::eval::inputs::load;
+use crate::report::json::{DriftErrorReport, EstimateReport};
+use crate::sources::Progress;
+
+/// The parameter a sweep varies (each is the `eval` flag of the same name).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SweepParam {
+    /// `--eps-min`: both ε (the paper's single ε_min).
+    EpsMin,
+    CurvatureEps,
+    PathEps,
+    /// `--window`: one window size per value.
+    Window,
+    LeverArm,
+    Overlap,
+    /// `--time-offset`: the applied Δt, no search.
+    TimeOffset,
+}
+
+impl SweepParam {
+    pub const ALL: [SweepParam; 7] = [
+        SweepParam::EpsMin,
+        SweepParam::CurvatureEps,
+        SweepParam::PathEps,
+        SweepParam::Window,
+        SweepParam::LeverArm,
+        SweepParam::Overlap,
+        SweepParam::TimeOffset,
+    ];
+
+    /// The name as on the command line (and in the CSV).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SweepParam::EpsMin => "eps-min",
+            SweepParam::CurvatureEps => "curvature-eps",
+            SweepParam::PathEps => "path-eps",
+            SweepParam::Window => "window",
+            SweepParam::LeverArm => "lever-arm",
+            SweepParam::Overlap => "overlap",
+            SweepParam::TimeOffset => "time-offset",
+        }
+    }
+
+    /// The axis label of the value.
+    pub fn axis_label(self) -> &'static str {
+        match self {
+            SweepParam::EpsMin => "ε_min, curvature and path (m)",
+            SweepParam::CurvatureEps => "ε of the curvature (m)",
+            SweepParam::PathEps => "ε of the path lengths (m)",
+            SweepParam::Window => "window w (m)",
+            SweepParam::LeverArm => "lever arm a (m)",
+            SweepParam::Overlap => "window overlap (fraction)",
+            SweepParam::TimeOffset => "applied time offset Δt (s)",
+        }
+    }
+
+    /// `config` with this parameter set to `v`, exactly as the `eval` flag would set it.
+    pub fn apply(self, config: &EvalConfig, v: f64) -> EvalConfig {
+        let mut c = config.clone();
+        match self {
+            SweepParam::EpsMin => c.eps_min_m = Some(v),
+            SweepParam::CurvatureEps => c.curvature_eps_m = Some(v),
+            SweepParam::PathEps => c.path_eps_m = Some(v),
+            SweepParam::Window => c.windows_m = vec![v],
+            SweepParam::LeverArm => c.lever_arm_m = v,
+            SweepParam::Overlap => c.overlap = v,
+            SweepParam::TimeOffset => c.time_offset_s = Some(v),
+        }
+        c
+    }
+}
+
+/// Parses `0.05,0.1,0.2` or `A:B:STEP` (A to B inclusive). Values are rounded to 1e-9 so that a
+/// generated 0.15 is the 0.15 a user would type.
+pub fn parse_values(s: &str) -> Result<Vec<f64>> {
+    let bad = |why: &str| {
+        Error::InvalidArgument(format!(
+            "--values `{s}`: {why}; give a list (0.05,0.1,0.2) or a range A:B:STEP (0.05:1:0.05)"
+        ))
+    };
+    let num = |x: &str| x.trim().parse::<f64>().ok().filter(|v| v.is_finite());
+    let values: Vec<f64> = if s.contains(':') {
+        let parts: Vec<Option<f64>> = s.split(':').map(num).collect();
+        let [Some(a), Some(b), Some(step)] = parts[..] else {
+            return Err(bad("a range is three numbers A:B:STEP"));
+        };
+        if step <= 0.0 || b < a {
+            return Err(bad("a range needs A ≤ B and STEP > 0"));
+        }
+        let n = ((b - a) / step + 1e-9).floor() as usize + 1;
+        if n > 10_000 {
+            return Err(bad("more than 10000 values"));
+        }
+        (0..n)
+            .map(|k| ((a + k as f64 * step) * 1e9).round() / 1e9)
+            .collect()
+    } else {
+        s.split(',')
+            .map(|x| num(x).ok_or_else(|| bad("not a number")))
+            .collect::<Result<_>>()?
+    };
+    if values.is_empty() {
+        return Err(bad("no value"));
+    }
+    Ok(values)
+}
+
+/// The numbers one (value, estimate, window size) contributes to the sweep.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RowMetrics {
+    pub window_m: f64,
+    pub windows: usize,
+    pub de_median: Option<f64>,
+    pub de_rmse: Option<f64>,
+    pub discarded_fraction: f64,
+    /// Δt applied by that run (the searched or the given one), seconds.
+    pub applied_offset_s: f64,
+    /// `ok`, `weak` or `given`.
+    pub offset_status: String,
+    // APE / RPE (issue 11): add the fields here, fill them in `row_metrics`, add the CSV columns.
+}
+
+/// The metrics of a row, from one estimate's report at one window size.
+pub fn row_metrics(e: &EstimateReport, d: &DriftErrorReport) -> RowMetrics {
+    RowMetrics {
+        window_m: d.window_m,
+        windows: d.windows,
+        de_median: d.median,
+        de_rmse: d.rmse,
+        discarded_fraction: d.discarded_fraction,
+        applied_offset_s: e.time_offset.applied_s,
+        offset_status: e.time_offset.status.clone(),
+    }
+}
+
+/// One row of the sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepRow {
+    pub value: f64,
+    pub estimate: String,
+    /// `None` when the run at this value failed (see `error`).
+    pub metrics: Option<RowMetrics>,
+    pub error: Option<String>,
+}
+
+/// Each method's Δt for an estimate, from a run with the search (time-offset sweeps).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MethodOffset {
+    pub estimate: String,
+    pub method: String,
+    pub offset_s: f64,
+}
+
+/// A finished sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sweep {
+    pub param: SweepParam,
+    pub rows: Vec<SweepRow>,
+    pub method_offsets: Vec<MethodOffset>,
+}
+
+/// Runs the evaluation of `base` at every value of `param`, in parallel; `on_done` is called as each
+/// value finishes (for a progress bar). A value whose run fails is a row with its error; the sweep
+/// fails only when every value does.
+pub fn run_sweep(
+    base: &EvalConfig,
+    param: SweepParam,
+    values: &[f64],
+    read: Progress<'_>,
+    on_done: &(dyn Fn() + Sync),
+) -> Result<Sweep> {
+    base.validate()?;
+    // Read once: no swept parameter changes what is read, only what is computed from it.
+    let inputs = load(base, read)?;
+    let evaluate = |c: &EvalConfig| evaluate_loaded(c, inputs.clone()).map(|(r, _)| r);
+    let runs: Vec<(f64, Result<Vec<SweepRow>>)> = values
+        .par_iter()
+        .map(|&v| {
+            let r = evaluate(&param.apply(base, v)).map(|report| {
+                report
+                    .estimates
+                    .iter()
+                    .flat_map(|e| {
+                        e.drift_error.iter().map(move |d| SweepRow {
+                            value: v,
+                            estimate: e.name.clone(),
+                            metrics: Some(row_metrics(e, d)),
+                            error: None,
+                        })
+                    })
+                    .collect()
+            });
+            on_done();
+            (v, r)
+        })
+        .collect();
+    if runs.iter().all(|(_, r)| r.is_err()) {
+        if let Some((_, Err(e))) = runs.into_iter().next() {
+            return Err(e);
+        }
+        return Err(Error::InvalidArgument(
+            "a sweep needs at least one value".into(),
+        ));
+    }
+    let mut rows = Vec::new();
+    for (v, r) in runs {
+        match r {
+            Ok(mut rs) => rows.append(&mut rs),
+            Err(e) => rows.push(SweepRow {
+                value: v,
+                estimate: String::new(),
+                metrics: None,
+                error: Some(e.to_string()),
+            }),
+        }
+    }
+    let method_offsets = if param == SweepParam::TimeOffset {
+        let mut searched = base.clone();
+        searched.time_offset_s = None;
+        evaluate(&searched)?
+            .estimates
+            .iter()
+            .flat_map(|e| {
+                e.time_offset.methods.iter().filter_map(|m| {
+                    m.offset_s.map(|dt| MethodOffset {
+                        estimate: e.name.clone(),
+                        method: m.method.clone(),
+                        offset_s: dt,
+                    })
+                })
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    Ok(Sweep {
+        param,
+        rows,
+        method_offsets,
+    })
+}
+
+impl Sweep {
+    /// `sweep.csv`: one row per value × estimate × window size; empty cells where undefined.
+    pub fn to_csv(&self) -> Result<String> {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        let io = |e: csv::Error| Error::InvalidArgument(format!("writing sweep.csv: {e}"));
+        w.write_record([
+            "param",
+            "value",
+            "estimate",
+            "window_m",
+            "windows",
+            "de_median",
+            "de_rmse",
+            "discarded_fraction",
+            "applied_offset_s",
+            "offset_status",
+            "error",
+        ])
+        .map_err(io)?;
+        let opt = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+        for r in &self.rows {
+            let m = r.metrics.as_ref();
+            w.write_record([
+                self.param.as_str().to_string(),
+                r.value.to_string(),
+                r.estimate.clone(),
+                opt(m.map(|m| m.window_m)),
+                m.map_or(String::new(), |m| m.windows.to_string()),
+                opt(m.and_then(|m| m.de_median)),
+                opt(m.and_then(|m| m.de_rmse)),
+                opt(m.map(|m| m.discarded_fraction)),
+                opt(m.map(|m| m.applied_offset_s)),
+                m.map_or(String::new(), |m| m.offset_status.clone()),
+                r.error.clone().unwrap_or_default(),
+            ])
+            .map_err(io)?;
+        }
+        let bytes = w
+            .into_inner()
+            .map_err(|e| Error::InvalidArgument(format!("writing sweep.csv: {e}")))?;
+        String::from_utf8(bytes).map_err(|e| Error::InvalidArgument(e.to_string()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn values_parse_as_list_and_range() {
+        assert_eq!(parse_values("0.1,0.2, 0.5").unwrap(), vec![0.1, 0.2, 0.5]);
+        let r = parse_values("0.05:0.25:0.05").unwrap();
+        assert_eq!(r, vec![0.05, 0.1, 0.15, 0.2, 0.25]);
+        assert_eq!(parse_values("-1:1:1").unwrap(), vec![-1.0, 0.0, 1.0]);
+        for bad in ["", "a", "1:0:1", "0:1:0", "0:1", "1,x"] {
+            assert!(parse_values(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn apply_sets_the_flag() {
+        use crate::eval::config::NamedInput;
+        let c = EvalConfig::new(None, NamedInput::topic("/r"), vec![NamedInput::topic("/e")]);
+        assert_eq!(SweepParam::EpsMin.apply(&c, 0.3).eps_min_m, Some(0.3));
+        assert_eq!(SweepParam::Window.apply(&c, 10.0).windows_m, vec![10.0]);
+        assert_eq!(
+            SweepParam::TimeOffset.apply(&c, -0.2).time_offset_s,
+            Some(-0.2)
+        );
+    }
+}

@@ -1,0 +1,234 @@
+//! What every figure shares: the embedded font, sizes, the colour-blind-safe viridis map, the
+//! rendering of a figure to SVG text or PNG bytes, and the decimation that bounds what is drawn.
+//!
+//! The font (DejaVu Sans, Bitstream Vera licence, `assets/fonts/`) is compiled into the binary and
+//! registered with plotters' `ab_glyph` text backend, so PNGs need no system font; SVG text names the
+//! generic `sans-serif` family and is laid out with the same metrics.
+
+use std::sync::Once;
+
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use crate::error::{Error, Result};
+
+/// DejaVu Sans (see `assets/fonts/DejaVuSans.LICENSE`).
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+/// The family every figure's text uses.
+pub const FAMILY: &str = "sans-serif";
+/// Figure size in pixels (readable at 100 % zoom on a laptop screen).
+pub const SIZE: (u32, u32) = (960, 560);
+/// Most points drawn per series: a 2-hour mission's figure stays well under 2 MB of SVG.
+pub const MAX_POINTS: usize = 2500;
+
+/// How figures are written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlotFormat {
+    Svg,
+    Png,
+}
+
+impl PlotFormat {
+    /// The file extension.
+    pub fn extension(self) -> &'static str {
+        match self {
+            PlotFormat::Svg => "svg",
+            PlotFormat::Png => "png",
+        }
+    }
+}
+
+/// Something that draws itself on any plotters backend (SVG text or an RGB bitmap).
+pub trait Draw {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>;
+}
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The bytes are ours and valid; a failure would show as missing text, not a crash.
+        let _ = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT);
+        let _ = plotters::style::register_font(FAMILY, FontStyle::Bold, FONT);
+    });
+}
+
+/// Maps any plotters error to ours.
+pub fn plot_err<E: std::fmt::Debug>(e: E) -> Error {
+    Error::InvalidArgument(format!("drawing a figure failed: {e:?}"))
+}
+
+/// Renders `figure` as SVG text.
+pub fn render_svg(figure: &impl Draw) -> Result<String> {
+    register_font();
+    let mut s = String::new();
+    {
+        let root = SVGBackend::with_string(&mut s, SIZE).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        figure.draw(&root)?;
+        root.present().map_err(plot_err)?;
+    }
+    Ok(s)
+}
+
+/// Renders `figure` as a PNG file at `path` (written beside it under a temporary name, then renamed).
+pub fn render_png(figure: &impl Draw, path: &std::path::Path) -> Result<()> {
+    register_font();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    // The bitmap encoder picks the format from the extension: the temporary name ends in .png.
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
+    let out = (|| {
+        let root = BitMapBackend::new(&tmp, SIZE).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        figure.draw(&root)?;
+        root.present().map_err(plot_err)
+    })()
+    .and_then(|_| {
+        std::fs::rename(&tmp, path).map_err(|e| Error::Output {
+            path: path.to_path_buf(),
+            detail: e.to_string(),
+        })
+    });
+    if out.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    out
+}
+
+/// Viridis at `f` in [0, 1] (clamped).
+pub fn viridis(f: f64) -> RGBColor {
+    let f = if f.is_finite() {
+        f.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    ViridisRGB.get_color(f as f32)
+}
+
+/// `n` distinct viridis colours for series (avoiding the palest yellow, hard to see on white).
+pub fn series_color(i: usize, n: usize) -> RGBColor {
+    if n <= 1 {
+        return viridis(0.25);
+    }
+    viridis(0.85 * i as f64 / (n - 1) as f64)
+}
+
+/// Text style of titles.
+pub fn title_font() -> TextStyle<'static> {
+    (FAMILY, 20).into_font().color(&BLACK)
+}
+
+/// Text style of axis labels, ticks and legends.
+pub fn label_font() -> TextStyle<'static> {
+    (FAMILY, 15).into_font().color(&BLACK)
+}
+
+/// A chart on f64 axes.
+pub type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// A titled chart over `x` × `y` with labelled axes, the frame every figure shares.
+pub fn xy_chart<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    (x, y): ((f64, f64), (f64, f64)),
+    (x_desc, y_desc): (&str, &str),
+) -> Result<Chart<'a, DB>> {
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, title_font())
+        .margin(10)
+        .x_label_area_size(50)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x.0..x.1, y.0..y.1)
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .label_style(label_font())
+        .axis_desc_style(label_font())
+        .draw()
+        .map_err(plot_err)?;
+    Ok(chart)
+}
+
+/// The legend box of `chart` at `pos`.
+pub fn legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut Chart<'a, DB>,
+    pos: SeriesLabelPosition,
+) -> Result<()> {
+    chart
+        .configure_series_labels()
+        .label_font(label_font())
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(pos)
+        .draw()
+        .map_err(plot_err)
+}
+
+/// Indices of at most `max` of `n` items, evenly spaced, the first and last always kept.
+pub fn decimate(n: usize, max: usize) -> Vec<usize> {
+    if n <= max || max < 2 {
+        return (0..n).collect();
+    }
+    let step = (n - 1) as f64 / (max - 1) as f64;
+    let mut v: Vec<usize> = (0..max)
+        .map(|k| (k as f64 * step).round() as usize)
+        .collect();
+    v.dedup();
+    v
+}
+
+/// `[lo, hi]` of the finite values, widened by 5 % (and to a unit span when flat).
+pub fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let span = hi - lo;
+    if span <= 1e-12 {
+        return (lo - 0.5, hi + 0.5);
+    }
+    (lo - 0.05 * span, hi + 0.05 * span)
+}
+
+/// A "no data" figure: the title and one line saying why, so a user never meets an empty file.
+pub struct Empty {
+    pub title: String,
+    pub why: String,
+}
+
+impl Draw for Empty {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
+        root.draw(&Text::new(self.title.clone(), (20, 20), title_font()))
+            .map_err(plot_err)?;
+        root.draw(&Text::new(self.why.clone(), (20, 60), label_font()))
+            .map_err(plot_err)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decimate_keeps_ends_and_bound() {
+        let v = decimate(100_000, 2500);
+        assert_eq!(v.len(), 2500);
+        assert_eq!((v[0], *v.last().unwrap()), (0, 99_999));
+        assert_eq!(decimate(10, 2500), (0..10).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn padded_range_handles_flat_and_empty() {
+        assert_eq!(padded_range([1.0, 1.0].into_iter()), (0.5, 1.5));
+        assert_eq!(padded_range(std::iter::empty()), (0.0, 1.0));
+    }
+}
