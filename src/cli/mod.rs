@@ -43,6 +43,8 @@ pub fn run(cli: args::Cli) -> ExitCode {
         args::Command::Batch(a) => commands::batch::run(a),
         args::Command::Merge(a) => commands::merge::run(a),
         args::Command::Export(a) => commands::export::run(a),
+        args::Command::Ape(a) => commands::ape::run(*a),
+        args::Command::Rpe(a) => commands::rpe::run(*a),
     };
     match result {
         Ok(code) => ExitCode::from(code),

@@ -1,4 +1,4 @@
-//! Metrics: Drift Error (the paper) and, later, the standard APE/RPE.
+//! Metrics: Drift Error (the paper) and, in [`standard`], evo's APE/RPE.
 
 pub mod decimate;
 pub mod drift_error;
@@ -7,3 +7,4 @@ pub mod lever_fit;
 pub mod rotation_in_place;
 pub mod stats;
 pub mod windows;
+pub mod standard;

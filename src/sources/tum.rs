@@ -14,6 +14,14 @@ use crate::trajectory::Trajectory;
 /// Reads a TUM file. Lines with 4 values (`t x y z`) give a position-only trajectory; 8 values add the
 /// orientation. Stamps are parsed as seconds and rounded to the nanosecond.
 pub fn read_tum(path: &Path) -> Result<Trajectory> {
+    let mut t = read_tum_rows(path)?;
+    t.sort_dedup();
+    Ok(t)
+}
+
+/// Reads a TUM file like [`read_tum`] but keeps the rows as written (no sorting, repeated stamps
+/// kept): evo's readers do so, and `trajdrift ape`/`rpe` must pair the same poses to give its numbers.
+pub fn read_tum_rows(path: &Path) -> Result<Trajectory> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut traj: Option<Trajectory> = None;
     for (i, line) in BufReader::new(file).lines().enumerate() {
@@ -49,9 +57,7 @@ pub fn read_tum(path: &Path) -> Result<Trajectory> {
         });
         t.push(stamp_ns, p, q);
     }
-    let mut t = traj.unwrap_or_default();
-    t.sort_dedup();
-    Ok(t)
+    Ok(traj.unwrap_or_default())
 }
 
 /// Parses the first field of a TUM line as integer nanoseconds without going through `f64`, so that

@@ -1,8 +1,11 @@
 //! One handler per command: turn arguments into a library call, print the result.
 
+pub mod ape;
 pub mod batch;
+pub mod metric;
 pub mod eval;
 pub mod export;
 pub mod merge;
 pub mod simulate;
 pub mod topics;
+pub mod rpe;
