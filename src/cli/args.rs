@@ -421,13 +421,27 @@ pub struct MetricArgs {
     #[arg(long = "align-yaw", conflicts_with_all = ["align", "correct_scale"])]
     pub align_yaw: bool,
     /// Largest stamp difference of an associated pair, seconds.
-    #[arg(long = "t_max_diff", alias = "t-max-diff", value_name = "S", default_value_t = 0.01)]
+    #[arg(
+        long = "t_max_diff",
+        alias = "t-max-diff",
+        value_name = "S",
+        default_value_t = 0.01
+    )]
     pub t_max_diff: f64,
     /// Known offset added to the estimate's stamps for association, seconds (evo --t_offset).
-    #[arg(long = "t_offset", value_name = "S", allow_hyphen_values = true, conflicts_with = "time_offset")]
+    #[arg(
+        long = "t_offset",
+        value_name = "S",
+        allow_hyphen_values = true,
+        conflicts_with = "time_offset"
+    )]
     pub t_offset: Option<f64>,
     /// Offset added to the estimate's stamps, seconds, or `auto`: found by eval's machinery.
-    #[arg(long = "time-offset", value_name = "S|auto", allow_hyphen_values = true)]
+    #[arg(
+        long = "time-offset",
+        value_name = "S|auto",
+        allow_hyphen_values = true
+    )]
     pub time_offset: Option<String>,
     /// Crop the reference from this stamp, seconds (its own clock).
     #[arg(long = "t_start", value_name = "S", allow_hyphen_values = true)]
@@ -465,7 +479,12 @@ pub struct RpeArgs {
     #[arg(short = 'u', long = "delta_unit", alias = "delta-unit", default_value = "f", value_parser = ["f", "m", "d", "r"])]
     pub delta_unit: String,
     /// Relative tolerance of the delta in --all_pairs mode.
-    #[arg(short = 't', long = "delta_tol", alias = "delta-tol", default_value_t = 0.1)]
+    #[arg(
+        short = 't',
+        long = "delta_tol",
+        alias = "delta-tol",
+        default_value_t = 0.1
+    )]
     pub delta_tol: f64,
     /// Every pair at the delta, not consecutive ones.
     #[arg(long = "all_pairs", alias = "all-pairs")]

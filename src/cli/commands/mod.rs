@@ -2,10 +2,10 @@
 
 pub mod ape;
 pub mod batch;
-pub mod metric;
 pub mod eval;
 pub mod export;
 pub mod merge;
+pub mod metric;
+pub mod rpe;
 pub mod simulate;
 pub mod topics;
-pub mod rpe;

@@ -135,7 +135,9 @@ pub fn interpolate(p: &Poses, at: &[f64]) -> Poses {
         rotations: p.rotations.as_ref().map(|_| Vec::with_capacity(at.len())),
     };
     for &t in at {
-        let i = s.partition_point(|&x| x < t).clamp(1, n.saturating_sub(1).max(1));
+        let i = s
+            .partition_point(|&x| x < t)
+            .clamp(1, n.saturating_sub(1).max(1));
         let dt = s[i] - s[i - 1];
         let f = if dt > 0.0 {
             ((t - s[i - 1]) / dt).clamp(0.0, 1.0)
@@ -181,6 +183,9 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("0 pairs within t_max_diff 0.01 s"), "{e}");
-        assert!(e.contains("about -5.000 s") && e.contains("--time-offset auto"), "{e}");
+        assert!(
+            e.contains("about -5.000 s") && e.contains("--time-offset auto"),
+            "{e}"
+        );
     }
 }

@@ -107,7 +107,9 @@ impl MetricInputs {
             MetricInputs::Eval(c) => {
                 let inputs = crate::eval::inputs::load(c, progress)?;
                 let est = inputs.estimates.first().ok_or_else(|| {
-                    Error::InvalidArgument("give an estimate (--estimate TOPIC or --estimate-file FILE)".into())
+                    Error::InvalidArgument(
+                        "give an estimate (--estimate TOPIC or --estimate-file FILE)".into(),
+                    )
                 })?;
                 let conv = Some(StampSeconds::SecPlusNanos);
                 Ok(LoadedPair {
@@ -145,7 +147,10 @@ impl MetricInputs {
 fn load_text(format: EvoFormat, reference: &Path, estimate: &Path) -> Result<LoadedPair> {
     let tum = |path: &Path| -> Result<Poses> {
         check_format(path, TextFormat::Tum, format)?;
-        Ok(Poses::from_trajectory(&read_tum_rows(path)?, Some(StampSeconds::Decimal)))
+        Ok(Poses::from_trajectory(
+            &read_tum_rows(path)?,
+            Some(StampSeconds::Decimal),
+        ))
     };
     let kitti = |path: &Path| -> Result<Poses> {
         check_format(path, TextFormat::Kitti, format)?;
@@ -158,7 +163,10 @@ fn load_text(format: EvoFormat, reference: &Path, estimate: &Path) -> Result<Loa
     };
     let euroc = |path: &Path| -> Result<Poses> {
         check_format(path, TextFormat::Euroc, format)?;
-        Ok(Poses::from_trajectory(&read_euroc(path)?, Some(StampSeconds::NanosOverE9)))
+        Ok(Poses::from_trajectory(
+            &read_euroc(path)?,
+            Some(StampSeconds::NanosOverE9),
+        ))
     };
     let (reference_poses, estimate_poses) = match format {
         EvoFormat::Tum => (tum(reference)?, tum(estimate)?),

@@ -209,7 +209,10 @@ pub fn evaluate(
         }
     };
     let stats = ErrorStats::of(&values).ok_or_else(|| {
-        Error::Metric("no error value could be computed (no pair, or all reference pair distances are 0)".into())
+        Error::Metric(
+            "no error value could be computed (no pair, or all reference pair distances are 0)"
+                .into(),
+        )
     })?;
     Ok(MetricResult {
         metric: match metric {

@@ -125,7 +125,12 @@ pub fn quaternion_matrix(q: &UnitQuaternion<f64>) -> Matrix3<f64> {
 /// The angle of a rotation matrix's logarithm, radians, as scipy's `Rotation.from_matrix(r).as_rotvec()`
 /// norm (Markley's quaternion extraction, then `2·atan2(|v|, |w|)`), which evo's `so3_log_angle` uses.
 pub fn rotation_angle(m: &Matrix3<f64>) -> f64 {
-    let d = [m[(0, 0)], m[(1, 1)], m[(2, 2)], m[(0, 0)] + m[(1, 1)] + m[(2, 2)]];
+    let d = [
+        m[(0, 0)],
+        m[(1, 1)],
+        m[(2, 2)],
+        m[(0, 0)] + m[(1, 1)] + m[(2, 2)],
+    ];
     let mut choice = 0;
     for k in 1..4 {
         if d[k] > d[choice] {

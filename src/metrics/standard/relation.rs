@@ -81,7 +81,9 @@ impl PoseRelation {
     pub fn of_error_pose(self, r: &Matrix3<f64>, t: &Vector3<f64>) -> f64 {
         match self {
             PoseRelation::RotPart => (r - Matrix3::identity()).norm(),
-            PoseRelation::Full => ((r - Matrix3::identity()).norm_squared() + t.norm_squared()).sqrt(),
+            PoseRelation::Full => {
+                ((r - Matrix3::identity()).norm_squared() + t.norm_squared()).sqrt()
+            }
             PoseRelation::AngleDeg => rotation_angle(r).to_degrees(),
             PoseRelation::AngleRad => rotation_angle(r),
             _ => t.norm(),

@@ -88,20 +88,38 @@ pub fn pairs(poses: &Poses, sel: &PairSelection) -> Result<Vec<(usize, usize)>> 
                 ids.windows(2).map(|w| (w[0], w[1])).collect()
             }
         }
-        DeltaUnit::Meters => by_path(&poses.positions, sel.delta, sel.delta * sel.rel_tol, sel.all_pairs),
+        DeltaUnit::Meters => by_path(
+            &poses.positions,
+            sel.delta,
+            sel.delta * sel.rel_tol,
+            sel.all_pairs,
+        ),
         DeltaUnit::Degrees | DeltaUnit::Radians => {
             let Some(r) = &poses.rotations else {
                 return Err(needs_orientation(&format!("-u {}", sel.unit.as_str())));
             };
-            let bound = if sel.unit == DeltaUnit::Degrees { 180.0 } else { std::f64::consts::PI };
+            let bound = if sel.unit == DeltaUnit::Degrees {
+                180.0
+            } else {
+                std::f64::consts::PI
+            };
             if !(0.0..=bound).contains(&sel.delta) {
                 return Err(Error::InvalidArgument(format!(
                     "-d {}: an angle delta must be within [0, {bound}]",
                     sel.delta
                 )));
             }
-            let scale = if sel.unit == DeltaUnit::Degrees { std::f64::consts::PI / 180.0 } else { 1.0 };
-            by_angle(r, sel.delta * scale, sel.delta * sel.rel_tol * scale, sel.all_pairs)
+            let scale = if sel.unit == DeltaUnit::Degrees {
+                std::f64::consts::PI / 180.0
+            } else {
+                1.0
+            };
+            by_angle(
+                r,
+                sel.delta * scale,
+                sel.delta * sel.rel_tol * scale,
+                sel.all_pairs,
+            )
         }
     };
     if out.is_empty() {
@@ -209,7 +227,14 @@ pub fn rpe_errors(
             estimate.len()
         )));
     }
-    let ids = pairs(if sel.from_reference { reference } else { estimate }, sel)?;
+    let ids = pairs(
+        if sel.from_reference {
+            reference
+        } else {
+            estimate
+        },
+        sel,
+    )?;
     let dist = |p: &Poses, i: usize, j: usize| (p.positions[i] - p.positions[j]).norm();
     let values = match relation {
         PoseRelation::PointDistance => ids
@@ -267,27 +292,48 @@ mod tests {
     #[test]
     fn path_pairs_restart_after_each_pair() {
         let p = line(&[0.6, 0.6, 0.3, 0.3, 0.5]);
-        let sel = PairSelection { delta: 1.0, unit: DeltaUnit::Meters, ..Default::default() };
+        let sel = PairSelection {
+            delta: 1.0,
+            unit: DeltaUnit::Meters,
+            ..Default::default()
+        };
         assert_eq!(pairs(&p, &sel).unwrap(), vec![(0, 2), (2, 5)]);
-        let all = PairSelection { all_pairs: true, ..sel };
-        assert_eq!(pairs(&p, &all).unwrap(), vec![(0, 2), (1, 3), (2, 5), (3, 5)]);
+        let all = PairSelection {
+            all_pairs: true,
+            ..sel
+        };
+        assert_eq!(
+            pairs(&p, &all).unwrap(),
+            vec![(0, 2), (1, 3), (2, 5), (3, 5)]
+        );
     }
 
     #[test]
     fn all_pairs_by_path_matches_a_scan() {
         let steps: Vec<f64> = (0..200).map(|i| ((i * 7919) % 13) as f64 * 0.05).collect();
         let p = line(&steps);
-        let sel = PairSelection { delta: 1.0, unit: DeltaUnit::Meters, all_pairs: true, ..Default::default() };
+        let sel = PairSelection {
+            delta: 1.0,
+            unit: DeltaUnit::Meters,
+            all_pairs: true,
+            ..Default::default()
+        };
         let fast = pairs(&p, &sel).unwrap();
         let mut d = vec![0.0];
-        for w in p.positions.windows(2) { d.push(d.last().unwrap() + (w[1] - w[0]).norm()); }
+        for w in p.positions.windows(2) {
+            d.push(d.last().unwrap() + (w[1] - w[0]).norm());
+        }
         let mut slow = Vec::new();
         for i in 0..d.len() - 1 {
             let mut best = i + 1;
             for j in i + 1..d.len() {
-                if ((d[j] - d[i]) - 1.0).abs() < ((d[best] - d[i]) - 1.0).abs() { best = j; }
+                if ((d[j] - d[i]) - 1.0).abs() < ((d[best] - d[i]) - 1.0).abs() {
+                    best = j;
+                }
             }
-            if ((d[best] - d[i]) - 1.0).abs() <= 0.1 { slow.push((i, best)); }
+            if ((d[best] - d[i]) - 1.0).abs() <= 0.1 {
+                slow.push((i, best));
+            }
         }
         assert_eq!(fast, slow);
     }
