@@ -169,7 +169,7 @@ mod tests {
         assert_eq!(ia, vec![0, 1, 2]);
         assert_eq!(ib, vec![0, 1, 1]);
         let (ia, ib) = matching_time_indices(&a, &b, 0.01, 0.2);
-        assert_eq!((ia, ib), (vec![], vec![]));
+        assert_eq!((ia, ib), (vec![3], vec![3]));
     }
 
     #[test]
