@@ -135,7 +135,7 @@ pub fn run(a: &MetricArgs, metric: Metric) -> Result<u8> {
     } = inputs.load(&|_| {})?;
     let pipeline = pipeline(a, offset);
     let result =
-        trajdrift::metrics::standard::evaluate(&reference, &estimate, metric, relation, &pipeline)?;
+        trajdrift::metrics::standard::evaluate(reference, estimate, metric, relation, &pipeline)?;
     let to_stdout = a.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
     if let Some(path) = &a.json {
         let mut bytes = serde_json::to_vec_pretty(&result)?;

@@ -6,7 +6,7 @@
 
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
 
-use super::poses::Poses;
+use super::poses::{Poses, Rotations};
 use crate::error::{Error, Result};
 
 /// evo's `--sync_method`.
@@ -26,44 +26,66 @@ pub fn matching_time_indices(
     b: &[f64],
     max_diff: f64,
     offset_b: f64,
-) -> (Vec<usize>, Vec<usize>) {
-    let b: Vec<f64> = b.iter().map(|t| t + offset_b).collect();
+) -> (Vec<u32>, Vec<u32>) {
     let (mut ia, mut ib) = (Vec::new(), Vec::new());
-    let (Some(&first), Some(&last)) = (b.first(), b.last()) else {
+    if b.is_empty() {
         return (ia, ib);
-    };
+    }
+    // `b + offset` as evo forms it (`stamps_2 += offset_2`), without a copy of the stamps.
+    let at = |j: usize| b[j] + offset_b;
     if b.windows(2).any(|w| w[1] < w[0]) {
         // Unsorted stamps: evo's linear search (first minimum), kept for the same pairs.
         for (i, &t) in a.iter().enumerate() {
             let mut best = 0;
-            for (j, x) in b.iter().enumerate() {
-                if (x - t).abs() < (b[best] - t).abs() {
+            for j in 0..b.len() {
+                if (at(j) - t).abs() < (at(best) - t).abs() {
                     best = j;
                 }
             }
-            if (b[best] - t).abs() <= max_diff {
-                ia.push(i);
-                ib.push(best);
+            if (at(best) - t).abs() <= max_diff {
+                ia.push(i as u32);
+                ib.push(best as u32);
             }
         }
         return (ia, ib);
     }
+    let (first, last) = (at(0), at(b.len() - 1));
+    let mut j = 0usize;
+    let mut prev = f64::NEG_INFINITY;
     for (i, &t) in a.iter().enumerate() {
         if t < first - max_diff || t > last + max_diff {
             continue;
         }
-        let j = b.partition_point(|&x| x <= t).min(b.len() - 1);
-        let ub = b[j] - t;
-        let lb = if j > 0 { t - b[j - 1] } else { f64::INFINITY };
+        // evo's `searchsorted(b, t, side="right")`: a forward walk while `a` is sorted, else a search.
+        if t >= prev {
+            while j < b.len() && at(j) <= t {
+                j += 1;
+            }
+        } else {
+            let (mut lo, mut hi) = (0, b.len());
+            while lo < hi {
+                let mid = (lo + hi) / 2;
+                if at(mid) <= t {
+                    lo = mid + 1;
+                } else {
+                    hi = mid;
+                }
+            }
+            j = lo;
+        }
+        prev = t;
+        let k = j.min(b.len() - 1);
+        let ub = at(k) - t;
+        let lb = if k > 0 { t - at(k - 1) } else { f64::INFINITY };
         let best = if ub <= max_diff && ub < lb {
-            j
+            k
         } else if lb <= max_diff && lb <= ub {
-            j - 1
+            k - 1
         } else {
             continue;
         };
-        ia.push(i);
-        ib.push(best);
+        ia.push(i as u32);
+        ib.push(best as u32);
     }
     (ia, ib)
 }
@@ -71,8 +93,8 @@ pub fn matching_time_indices(
 /// Associates `reference` and `estimate` (both stamped); returns the pairs in the order of the shorter
 /// one. `offset_s` is added to the estimate's stamps for the matching.
 pub fn associate(
-    reference: &Poses,
-    estimate: &Poses,
+    reference: Poses,
+    estimate: Poses,
     max_diff: f64,
     offset_s: f64,
     method: SyncMethod,
@@ -83,18 +105,19 @@ pub fn associate(
         ));
     };
     let est_longer = estimate.len() > reference.len();
-    let (short, long) = if est_longer {
-        (reference, estimate)
-    } else {
-        (estimate, reference)
-    };
     let (ts, tl) = if est_longer { (tr, te) } else { (te, tr) };
     let off = if est_longer { offset_s } else { -offset_s };
     let (is, il) = matching_time_indices(ts, tl, max_diff, off);
     if is.is_empty() {
         return Err(no_pairs(tr, te, max_diff, offset_s));
     }
+    let (short, long) = if est_longer {
+        (reference, estimate)
+    } else {
+        (estimate, reference)
+    };
     let short = short.select(&is);
+    drop(is);
     let long = match method {
         SyncMethod::NearestTime => long.select(&il),
         SyncMethod::Interpolation => {
@@ -103,7 +126,7 @@ pub fn associate(
                 .as_ref()
                 .map(|s| s.iter().map(|t| t - off).collect())
                 .unwrap_or_default();
-            interpolate(long, &at)
+            interpolate(&long, &at)
         }
     };
     Ok(if est_longer {
@@ -129,32 +152,30 @@ fn no_pairs(tr: &[f64], te: &[f64], max_diff: f64, offset_s: f64) -> Error {
 pub fn interpolate(p: &Poses, at: &[f64]) -> Poses {
     let s = p.stamps_s.as_deref().unwrap_or(&[]);
     let n = s.len();
-    let mut out = Poses {
-        stamps_s: Some(at.to_vec()),
-        positions: Vec::with_capacity(at.len()),
-        rotations: p.rotations.as_ref().map(|_| Vec::with_capacity(at.len())),
-    };
+    let mut positions = Vec::with_capacity(at.len());
+    let mut rotations = p.rotations.as_ref().map(|_| Vec::with_capacity(at.len()));
     for &t in at {
-        let i = s
-            .partition_point(|&x| x < t)
-            .clamp(1, n.saturating_sub(1).max(1));
+        let i = s.partition_point(|&x| x < t).clamp(1, n.saturating_sub(1).max(1));
         let dt = s[i] - s[i - 1];
         let f = if dt > 0.0 {
             ((t - s[i - 1]) / dt).clamp(0.0, 1.0)
         } else {
             0.0
         };
-        out.positions
-            .push(p.positions[i - 1] + (p.positions[i] - p.positions[i - 1]) * f);
-        if let (Some(r), Some(o)) = (&p.rotations, out.rotations.as_mut()) {
-            let q = |m: &Matrix3<f64>| {
-                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*m))
+        positions.push(p.positions[i - 1] + (p.positions[i] - p.positions[i - 1]) * f);
+        if let Some(o) = rotations.as_mut() {
+            let q = |m: Matrix3<f64>| {
+                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(m))
             };
-            let qi = q(&r[i - 1]).slerp(&q(&r[i]), f);
+            let qi = q(p.rotation(i - 1)).slerp(&q(p.rotation(i)), f);
             o.push(*qi.to_rotation_matrix().matrix());
         }
     }
-    out
+    Poses {
+        stamps_s: Some(at.to_vec()),
+        positions,
+        rotations: rotations.map(Rotations::Matrices),
+    }
 }
 
 #[cfg(test)]
@@ -179,7 +200,7 @@ mod tests {
             positions: vec![nalgebra::Vector3::zeros(); 10],
             rotations: None,
         };
-        let e = associate(&p(100.0), &p(105.0), 0.01, 0.0, SyncMethod::NearestTime)
+        let e = associate(p(100.0), p(105.0), 0.01, 0.0, SyncMethod::NearestTime)
             .unwrap_err()
             .to_string();
         assert!(e.contains("0 pairs within t_max_diff 0.01 s"), "{e}");

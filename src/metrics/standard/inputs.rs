@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::poses::{Poses, StampSeconds};
+use super::poses::{Poses, Rotations, StampSeconds};
 use crate::error::{Error, Result};
 use crate::eval::config::{EvalConfig, NamedInput};
 use crate::sources::euroc::read_euroc;
@@ -112,11 +112,13 @@ impl MetricInputs {
                     )
                 })?;
                 let conv = Some(StampSeconds::SecPlusNanos);
+                let (reference_label, estimate_label) = (inputs.reference.label, est.label.clone());
+                let estimate = inputs.estimates.into_iter().next().map(|e| e.trajectory).unwrap_or_default();
                 Ok(LoadedPair {
-                    reference: Poses::from_trajectory(&inputs.reference.trajectory, conv),
-                    estimate: Poses::from_trajectory(&est.trajectory, conv),
-                    reference_label: inputs.reference.label.clone(),
-                    estimate_label: est.label.clone(),
+                    reference: Poses::from_trajectory(inputs.reference.trajectory, conv),
+                    estimate: Poses::from_trajectory(estimate, conv),
+                    reference_label,
+                    estimate_label,
                 })
             }
         }
@@ -148,7 +150,7 @@ fn load_text(format: EvoFormat, reference: &Path, estimate: &Path) -> Result<Loa
     let tum = |path: &Path| -> Result<Poses> {
         check_format(path, TextFormat::Tum, format)?;
         Ok(Poses::from_trajectory(
-            &read_tum_rows(path)?,
+            read_tum_rows(path)?,
             Some(StampSeconds::Decimal),
         ))
     };
@@ -158,22 +160,24 @@ fn load_text(format: EvoFormat, reference: &Path, estimate: &Path) -> Result<Loa
         Ok(Poses {
             stamps_s: None,
             positions: rows.iter().map(|r| r.1).collect(),
-            rotations: Some(rows.iter().map(|r| r.0).collect()),
+            rotations: Some(Rotations::Matrices(rows.iter().map(|r| r.0).collect())),
         })
     };
     let euroc = |path: &Path| -> Result<Poses> {
         check_format(path, TextFormat::Euroc, format)?;
         Ok(Poses::from_trajectory(
-            &read_euroc(path)?,
+            read_euroc(path)?,
             Some(StampSeconds::NanosOverE9),
         ))
     };
+    // The two files are read at once (one per core).
     let (reference_poses, estimate_poses) = match format {
-        EvoFormat::Tum => (tum(reference)?, tum(estimate)?),
-        EvoFormat::Kitti => (kitti(reference)?, kitti(estimate)?),
-        EvoFormat::Euroc => (euroc(reference)?, tum(estimate)?),
+        EvoFormat::Tum => rayon::join(|| tum(reference), || tum(estimate)),
+        EvoFormat::Kitti => rayon::join(|| kitti(reference), || kitti(estimate)),
+        EvoFormat::Euroc => rayon::join(|| euroc(reference), || tum(estimate)),
         _ => unreachable!("recording forms are read through eval inputs"),
     };
+    let (reference_poses, estimate_poses) = (reference_poses?, estimate_poses?);
     Ok(LoadedPair {
         reference: reference_poses,
         estimate: estimate_poses,

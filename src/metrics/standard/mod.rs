@@ -178,16 +178,31 @@ pub struct DeltaReport {
 /// Computes `metric` of `estimate` against `reference`, evo's way. Stamped trajectories are associated
 /// by time; paths (`stamps_s: None`, KITTI) are paired by index and must have the same length.
 pub fn evaluate(
-    reference: &Poses,
-    estimate: &Poses,
+    mut reference: Poses,
+    mut estimate: Poses,
     metric: Metric,
     relation: PoseRelation,
     pipeline: &Pipeline,
 ) -> Result<MetricResult> {
-    let needs_rot = relation.needs_orientation()
-        || matches!(metric, Metric::Rpe(s) if matches!(s.unit, DeltaUnit::Degrees | DeltaUnit::Radians));
+    let point_relation = matches!(
+        relation,
+        PoseRelation::PointDistance | PoseRelation::PointDistanceErrorRatio
+    );
+    let (needs_rot, what) = match metric {
+        Metric::Rpe(s) if matches!(s.unit, DeltaUnit::Degrees | DeltaUnit::Radians) => {
+            (true, format!("-u {}", s.unit.as_str()))
+        }
+        // RPE's translation part is expressed in the body frame of pose i.
+        Metric::Rpe(_) => (!point_relation, format!("RPE -r {}", relation.as_str())),
+        Metric::Ape => (relation.needs_orientation(), format!("-r {}", relation.as_str())),
+    };
     if needs_rot && (reference.rotations.is_none() || estimate.rotations.is_none()) {
-        return Err(rpe::needs_orientation(&format!("-r {}", relation.as_str())));
+        return Err(rpe::needs_orientation(&what));
+    }
+    if !needs_rot && pipeline.alignment != Alignment::Origin {
+        // Not read: free them before association (half the memory at millions of poses).
+        reference.rotations = None;
+        estimate.rotations = None;
     }
     let (reference, mut estimate) = pair_up(reference, estimate, pipeline)?;
     let alignment = align(&reference, &mut estimate, pipeline)?;
@@ -247,8 +262,8 @@ pub fn evaluate_with_offset(
         ..pipeline.clone()
     };
     evaluate(
-        &Poses::from_trajectory(reference, conv),
-        &Poses::from_trajectory(estimate, conv),
+        Poses::from_trajectory(reference.clone(), conv),
+        Poses::from_trajectory(estimate.clone(), conv),
         metric,
         relation,
         &p,
@@ -256,10 +271,10 @@ pub fn evaluate_with_offset(
 }
 
 /// Crops the reference and associates (stamped), or checks the index pairing (paths).
-fn pair_up(reference: &Poses, estimate: &Poses, p: &Pipeline) -> Result<(Poses, Poses)> {
+fn pair_up(reference: Poses, estimate: Poses, p: &Pipeline) -> Result<(Poses, Poses)> {
     if reference.stamps_s.is_some() && estimate.stamps_s.is_some() {
         let reference = reference.crop(p.t_start_s, p.t_end_s);
-        return associate::associate(&reference, estimate, p.t_max_diff_s, p.t_offset_s, p.sync);
+        return associate::associate(reference, estimate, p.t_max_diff_s, p.t_offset_s, p.sync);
     }
     if reference.len() != estimate.len() {
         return Err(Error::Metric(format!(
@@ -268,7 +283,7 @@ fn pair_up(reference: &Poses, estimate: &Poses, p: &Pipeline) -> Result<(Poses, 
             estimate.len()
         )));
     }
-    Ok((reference.clone(), estimate.clone()))
+    Ok((reference, estimate))
 }
 
 /// Aligns `estimate` in place and reports the similarity used.
@@ -312,13 +327,16 @@ fn project(p: &Poses, plane: Plane) -> Poses {
     for x in &mut out.positions {
         x[k] = 0.0;
     }
-    if let Some(r) = out.rotations.as_mut() {
-        for m in r {
-            let a = euler_sxyz(m)[k];
-            let mut axis = Vector3::zeros();
-            axis[k] = 1.0;
-            *m = *nalgebra::Rotation3::from_scaled_axis(axis * a).matrix();
-        }
+    if p.rotations.is_some() {
+        let mut axis = Vector3::zeros();
+        axis[k] = 1.0;
+        let r = (0..p.len())
+            .map(|i| {
+                let a = euler_sxyz(&p.rotation(i))[k];
+                *nalgebra::Rotation3::from_scaled_axis(axis * a).matrix()
+            })
+            .collect();
+        out.rotations = Some(poses::Rotations::Matrices(r));
     }
     out
 }

@@ -30,6 +30,61 @@ impl StampSeconds {
     }
 }
 
+/// Orientations, kept in the form the source gave them.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Rotations {
+    /// Unit quaternions as read, and the rotation an alignment applied on their left: pose `i` is
+    /// `left · M(q_i)`, the product evo forms (its poses are `quaternion_matrix(q)`, then transformed).
+    /// Half the memory of matrices, which matters at millions of poses.
+    Quaternions {
+        q: Vec<UnitQuaternion<f64>>,
+        left: Matrix3<f64>,
+    },
+    /// Rotation matrices as read (KITTI rows, not re-orthonormalised, as evo uses them).
+    Matrices(Vec<Matrix3<f64>>),
+}
+
+impl Rotations {
+    /// The rotation matrix of pose `i`.
+    pub fn get(&self, i: usize) -> Matrix3<f64> {
+        match self {
+            Rotations::Quaternions { q, left } => left * quaternion_matrix(&q[i]),
+            Rotations::Matrices(m) => m[i],
+        }
+    }
+
+    /// Number of rotations.
+    pub fn len(&self) -> usize {
+        match self {
+            Rotations::Quaternions { q, .. } => q.len(),
+            Rotations::Matrices(m) => m.len(),
+        }
+    }
+
+    /// True when there is none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Applies `r` on the left of every rotation.
+    pub fn rotate(&mut self, r: &Matrix3<f64>) {
+        match self {
+            Rotations::Quaternions { left, .. } => *left = r * *left,
+            Rotations::Matrices(m) => m.iter_mut().for_each(|x| *x = r * *x),
+        }
+    }
+
+    fn select(self, ids: &[u32]) -> Rotations {
+        match self {
+            Rotations::Quaternions { q, left } => Rotations::Quaternions {
+                q: select_vec(q, ids),
+                left,
+            },
+            Rotations::Matrices(m) => Rotations::Matrices(select_vec(m, ids)),
+        }
+    }
+}
+
 /// A trajectory in evo's form.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Poses {
@@ -37,19 +92,21 @@ pub struct Poses {
     pub stamps_s: Option<Vec<f64>>,
     pub positions: Vec<Vector3<f64>>,
     /// Body-to-frame rotations, when the source has orientation.
-    pub rotations: Option<Vec<Matrix3<f64>>>,
+    pub rotations: Option<Rotations>,
 }
 
 impl Poses {
-    /// Converts a trajectory, stamped (`Some(conv)`) or a path paired by index (`None`).
-    pub fn from_trajectory(t: &Trajectory, stamps: Option<StampSeconds>) -> Poses {
+    /// Converts a trajectory (moving its vectors), stamped (`Some(conv)`) or a path paired by index
+    /// (`None`).
+    pub fn from_trajectory(t: Trajectory, stamps: Option<StampSeconds>) -> Poses {
         Poses {
-            stamps_s: stamps.map(|c| t.stamps_ns.iter().map(|&s| c.convert(s)).collect()),
-            positions: t.positions.clone(),
-            rotations: t
-                .orientations
-                .as_ref()
-                .map(|o| o.iter().map(quaternion_matrix).collect()),
+            // Same size as i64: the allocation is reused.
+            stamps_s: stamps.map(|c| t.stamps_ns.into_iter().map(|s| c.convert(s)).collect()),
+            positions: t.positions,
+            rotations: t.orientations.map(|q| Rotations::Quaternions {
+                q,
+                left: Matrix3::identity(),
+            }),
         }
     }
 
@@ -63,29 +120,28 @@ impl Poses {
         self.positions.is_empty()
     }
 
-    /// Keeps the poses at `ids`, in that order (repeats allowed: evo's association is not unique).
-    pub fn select(&self, ids: &[usize]) -> Poses {
+    /// Keeps the poses at `ids`, in that order (repeats allowed: evo's association is not unique); in
+    /// place when the ids allow it.
+    pub fn select(self, ids: &[u32]) -> Poses {
         Poses {
-            stamps_s: self
-                .stamps_s
-                .as_ref()
-                .map(|s| ids.iter().map(|&i| s[i]).collect()),
-            positions: ids.iter().map(|&i| self.positions[i]).collect(),
-            rotations: self
-                .rotations
-                .as_ref()
-                .map(|r| ids.iter().map(|&i| r[i]).collect()),
+            stamps_s: self.stamps_s.map(|s| select_vec(s, ids)),
+            positions: select_vec(self.positions, ids),
+            rotations: self.rotations.map(|r| r.select(ids)),
         }
     }
 
     /// Keeps the poses stamped in `[start, end]` (either bound optional), like evo's
     /// `reduce_to_time_range`.
-    pub fn crop(&self, start: Option<f64>, end: Option<f64>) -> Poses {
+    pub fn crop(self, start: Option<f64>, end: Option<f64>) -> Poses {
+        if start.is_none() && end.is_none() {
+            return self;
+        }
         let Some(s) = &self.stamps_s else {
-            return self.clone();
+            return self;
         };
-        let ids: Vec<usize> = (0..s.len())
+        let ids: Vec<u32> = (0..s.len())
             .filter(|&i| start.is_none_or(|a| s[i] >= a) && end.is_none_or(|b| s[i] <= b))
+            .map(|i| i as u32)
             .collect();
         self.select(&ids)
     }
@@ -94,7 +150,20 @@ impl Poses {
     pub fn rotation(&self, i: usize) -> Matrix3<f64> {
         self.rotations
             .as_ref()
-            .map_or_else(Matrix3::identity, |r| r[i])
+            .map_or_else(Matrix3::identity, |r| r.get(i))
+    }
+}
+
+/// `v[ids]`; in place (no second buffer) when every id is at or after its slot, as association's are.
+fn select_vec<T: Copy>(mut v: Vec<T>, ids: &[u32]) -> Vec<T> {
+    if ids.iter().enumerate().all(|(k, &i)| i as usize >= k) {
+        for (k, &i) in ids.iter().enumerate() {
+            v[k] = v[i as usize];
+        }
+        v.truncate(ids.len());
+        v
+    } else {
+        ids.iter().map(|&i| v[i as usize]).collect()
     }
 }
 

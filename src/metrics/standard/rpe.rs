@@ -95,9 +95,9 @@ pub fn pairs(poses: &Poses, sel: &PairSelection) -> Result<Vec<(usize, usize)>> 
             sel.all_pairs,
         ),
         DeltaUnit::Degrees | DeltaUnit::Radians => {
-            let Some(r) = &poses.rotations else {
+            if poses.rotations.is_none() {
                 return Err(needs_orientation(&format!("-u {}", sel.unit.as_str())));
-            };
+            }
             let bound = if sel.unit == DeltaUnit::Degrees {
                 180.0
             } else {
@@ -115,7 +115,7 @@ pub fn pairs(poses: &Poses, sel: &PairSelection) -> Result<Vec<(usize, usize)>> 
                 1.0
             };
             by_angle(
-                r,
+                poses,
                 sel.delta * scale,
                 sel.delta * sel.rel_tol * scale,
                 sel.all_pairs,
@@ -187,7 +187,8 @@ fn by_path(p: &[Vector3<f64>], delta: f64, tol: f64, all_pairs: bool) -> Vec<(us
     out
 }
 
-fn by_angle(r: &[Matrix3<f64>], delta: f64, tol: f64, all_pairs: bool) -> Vec<(usize, usize)> {
+fn by_angle(p: &Poses, delta: f64, tol: f64, all_pairs: bool) -> Vec<(usize, usize)> {
+    let r: Vec<Matrix3<f64>> = (0..p.len()).map(|i| p.rotation(i)).collect();
     let rel = |a: &Matrix3<f64>, b: &Matrix3<f64>| rotation_angle(&(a.transpose() * b));
     let mut out = Vec::new();
     if all_pairs {

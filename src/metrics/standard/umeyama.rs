@@ -32,9 +32,7 @@ impl Similarity {
             *x = self.rotation * (*x * self.scale) + self.translation;
         }
         if let Some(r) = p.rotations.as_mut() {
-            for m in r {
-                *m = self.rotation * *m;
-            }
+            r.rotate(&self.rotation);
         }
     }
 }
