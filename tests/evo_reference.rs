@@ -232,3 +232,59 @@ fn degenerate_alignment_and_position_only_data_are_one_line_errors() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// `eval --metrics`: evo's APE/RPE and KITTI drift on the time-aligned estimate, beside Drift Error.
+#[test]
+fn eval_reports_ape_rpe_and_kitti_beside_drift_error() {
+    let Some(dir) = evo_data() else { return };
+    let out = run_in(
+        &dir,
+        &[
+            "eval",
+            "--reference-file",
+            "KITTI_00_gt.txt",
+            "--estimate-file",
+            "KITTI_00_SPTAM.txt",
+            "--kitti-times",
+            "KITTI_00_gt_times.txt",
+            "--metrics",
+            "de,ape,rpe,kitti",
+            "--json",
+            "-",
+        ],
+    );
+    assert!(out.status.code() == Some(0) || out.status.code() == Some(3));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let e = &v["estimates"][0];
+    assert!(!e["drift_error"].as_array().unwrap().is_empty());
+    let m = &e["standard_metrics"];
+    let ape = m["ape"]["stats"]["rmse"].as_f64().unwrap();
+    assert!(
+        (ape - 3.590).abs() < 0.005,
+        "APE {ape} on the time-aligned S-PTAM"
+    );
+    assert!(m["rpe_1m"]["stats"]["rmse"].as_f64().unwrap() > 0.0);
+    assert!(m["rpe_point_distance_1m"]["pairs"].as_u64().unwrap() > 1000);
+    let k = &m["kitti"];
+    assert_eq!(k["per_length"].as_array().unwrap().len(), 8);
+    assert!(k["t_err_pct"].as_f64().unwrap() > 0.0);
+    // Only Drift Error: no standard metrics in the report.
+    let out = run_in(
+        &dir,
+        &[
+            "eval",
+            "--reference-file",
+            "KITTI_00_gt.txt",
+            "--estimate-file",
+            "KITTI_00_SPTAM.txt",
+            "--kitti-times",
+            "KITTI_00_gt_times.txt",
+            "--metrics",
+            "de",
+            "--json",
+            "-",
+        ],
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert!(v["estimates"][0].get("standard_metrics").is_none());
+}

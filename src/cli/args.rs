@@ -176,6 +176,15 @@ pub struct EvalArgs {
     /// Write the JSON report to FILE (`-` = stdout).
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+    /// Metrics per estimate: de (Drift Error), ape (SE(3)-aligned APE), rpe (RPE over 1 m, and its
+    /// point distance), kitti (KITTI segment drift); evo's on the time-aligned estimate.
+    #[arg(
+        long,
+        value_name = "LIST",
+        value_delimiter = ',',
+        default_value = "de,ape,rpe"
+    )]
+    pub metrics: Vec<String>,
     /// Print nothing but errors and warnings.
     #[arg(long, short)]
     pub quiet: bool,

@@ -31,11 +31,7 @@ pub fn read_tum_rows(path: &Path) -> Result<Trajectory> {
     let mut i = 0usize;
     loop {
         buf.clear();
-        if reader
-            .read_line(&mut buf)
-            .map_err(|e| Error::io(path, e))?
-            == 0
-        {
+        if reader.read_line(&mut buf).map_err(|e| Error::io(path, e))? == 0 {
             break;
         }
         i += 1;
@@ -237,20 +233,35 @@ mod tests {
     #[test]
     fn fast_numbers_equal_std_parse() {
         for f in [
-            "0", "-0.5", "1311868164.363181", "0.123456789", "-12.000001", "+3.25", "1.5e3", "1e-7",
-            "123456789012345678", "0.1234567890123456789", "nan", "inf", "1.",
+            "0",
+            "-0.5",
+            "1311868164.363181",
+            "0.123456789",
+            "-12.000001",
+            "+3.25",
+            "1.5e3",
+            "1e-7",
+            "123456789012345678",
+            "0.1234567890123456789",
+            "nan",
+            "inf",
+            "1.",
         ] {
             let want: Option<f64> = f.parse().ok();
-            assert_eq!(parse_f64(f).map(f64::to_bits), want.map(f64::to_bits), "{f}");
+            assert_eq!(
+                parse_f64(f).map(f64::to_bits),
+                want.map(f64::to_bits),
+                "{f}"
+            );
         }
         assert_eq!(parse_f64("."), None);
-        assert_eq!(stamp_ns_fast("1700000000.010000"), Some(1_700_000_000_010_000_000));
+        assert_eq!(
+            stamp_ns_fast("1700000000.010000"),
+            Some(1_700_000_000_010_000_000)
+        );
         assert_eq!(stamp_ns_fast("12"), Some(12_000_000_000));
         assert_eq!(stamp_ns_fast("-1.5"), None);
-        assert_eq!(
-            fields(" 1,2\t 3 ").collect::<Vec<_>>(),
-            vec!["1", "2", "3"]
-        );
+        assert_eq!(fields(" 1,2\t 3 ").collect::<Vec<_>>(), vec!["1", "2", "3"]);
         assert_eq!(parse_f64("1x"), None);
     }
 

@@ -95,6 +95,7 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
     c.t_end = a.t_end;
     c.export_aligned = a.export_aligned.clone();
     c.text = text_options(&a.text)?;
+    c.metrics = trajdrift::metrics::standard::in_eval::MetricSet::parse(&a.metrics)?;
     c.reference_lever = a
         .reference_lever
         .as_deref()

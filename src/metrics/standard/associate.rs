@@ -155,7 +155,9 @@ pub fn interpolate(p: &Poses, at: &[f64]) -> Poses {
     let mut positions = Vec::with_capacity(at.len());
     let mut rotations = p.rotations.as_ref().map(|_| Vec::with_capacity(at.len()));
     for &t in at {
-        let i = s.partition_point(|&x| x < t).clamp(1, n.saturating_sub(1).max(1));
+        let i = s
+            .partition_point(|&x| x < t)
+            .clamp(1, n.saturating_sub(1).max(1));
         let dt = s[i] - s[i - 1];
         let f = if dt > 0.0 {
             ((t - s[i - 1]) / dt).clamp(0.0, 1.0)

@@ -113,7 +113,12 @@ impl MetricInputs {
                 })?;
                 let conv = Some(StampSeconds::SecPlusNanos);
                 let (reference_label, estimate_label) = (inputs.reference.label, est.label.clone());
-                let estimate = inputs.estimates.into_iter().next().map(|e| e.trajectory).unwrap_or_default();
+                let estimate = inputs
+                    .estimates
+                    .into_iter()
+                    .next()
+                    .map(|e| e.trajectory)
+                    .unwrap_or_default();
                 Ok(LoadedPair {
                     reference: Poses::from_trajectory(inputs.reference.trajectory, conv),
                     estimate: Poses::from_trajectory(estimate, conv),

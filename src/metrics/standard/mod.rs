@@ -6,14 +6,16 @@
 
 pub mod ape;
 pub mod associate;
+pub mod in_eval;
 pub mod inputs;
+pub mod kitti_drift;
 pub mod poses;
 pub mod relation;
 pub mod rpe;
 pub mod umeyama;
 
 use nalgebra::{Matrix3, Vector3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::trajectory::Trajectory;
@@ -102,7 +104,7 @@ pub enum Metric {
 }
 
 /// evo's statistics of the per-pair errors (population std, numpy's median).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ErrorStats {
     pub rmse: f64,
     pub mean: f64,
@@ -132,7 +134,7 @@ impl ErrorStats {
 }
 
 /// The alignment applied, for the report.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AlignmentReport {
     pub method: String,
     /// Row-major 3×3 rotation.
@@ -144,7 +146,7 @@ pub struct AlignmentReport {
 }
 
 /// One APE or RPE result.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MetricResult {
     /// `ape` or `rpe`.
     pub metric: String,
@@ -156,7 +158,7 @@ pub struct MetricResult {
     /// Associated pose pairs (APE) or pose pairs compared (RPE).
     pub pairs: usize,
     /// RPE: the delta and its unit, and whether all pairs were used.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none", default)]
     pub delta: Option<DeltaReport>,
     /// The offset added to the estimate's stamps before association, seconds.
     pub time_offset_s: f64,
@@ -167,7 +169,7 @@ pub struct MetricResult {
 }
 
 /// The RPE delta as used.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DeltaReport {
     pub delta: f64,
     pub unit: String,
@@ -194,7 +196,10 @@ pub fn evaluate(
         }
         // RPE's translation part is expressed in the body frame of pose i.
         Metric::Rpe(_) => (!point_relation, format!("RPE -r {}", relation.as_str())),
-        Metric::Ape => (relation.needs_orientation(), format!("-r {}", relation.as_str())),
+        Metric::Ape => (
+            relation.needs_orientation(),
+            format!("-r {}", relation.as_str()),
+        ),
     };
     if needs_rot && (reference.rotations.is_none() || estimate.rotations.is_none()) {
         return Err(rpe::needs_orientation(&what));

@@ -194,6 +194,26 @@ pub fn quaternion_matrix(q: &UnitQuaternion<f64>) -> Matrix3<f64> {
 /// The angle of a rotation matrix's logarithm, radians, as scipy's `Rotation.from_matrix(r).as_rotvec()`
 /// norm (Markley's quaternion extraction, then `2·atan2(|v|, |w|)`), which evo's `so3_log_angle` uses.
 pub fn rotation_angle(m: &Matrix3<f64>) -> f64 {
+    // scipy first replaces a matrix that is not orthogonal (its Gram matrix not within
+    // `isclose(…, I, rtol=1e-5, atol=1e-12)`) by the nearest rotation U·Vᵀ of its SVD.
+    let g = m * m.transpose();
+    let close = (0..3).all(|i| {
+        (0..3).all(|j| {
+            let e = if i == j { 1.0 } else { 0.0 };
+            (g[(i, j)] - e).abs() <= 1e-12 + 1e-5 * f64::abs(e)
+        })
+    });
+    let orthogonal;
+    let m = if close {
+        m
+    } else {
+        let svd = m.svd(true, true);
+        orthogonal = match (svd.u, svd.v_t) {
+            (Some(u), Some(vt)) => u * vt,
+            _ => *m,
+        };
+        &orthogonal
+    };
     let d = [
         m[(0, 0)],
         m[(1, 1)],

@@ -135,7 +135,7 @@ pub fn pairs(poses: &Poses, sel: &PairSelection) -> Result<Vec<(usize, usize)>> 
 /// The one-line error for an option that needs orientation on position-only data.
 pub fn needs_orientation(what: &str) -> Error {
     Error::Metric(format!(
-        "{what} needs orientations, and a trajectory has positions only (TUM rows of 4 values, PointStamped, NavSatFix); use -r trans_part or -r point_distance"
+        "{what} needs orientations, and a trajectory has positions only (TUM rows of 4 values, PointStamped, NavSatFix); use -r point_distance (RPE) or -r trans_part (APE)"
     ))
 }
 
@@ -303,10 +303,7 @@ mod tests {
             all_pairs: true,
             ..sel
         };
-        assert_eq!(
-            pairs(&p, &all).unwrap(),
-            vec![(1, 3), (2, 5)]
-        );
+        assert_eq!(pairs(&p, &all).unwrap(), vec![(1, 3), (2, 5)]);
     }
 
     #[test]
