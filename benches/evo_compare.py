@@ -24,7 +24,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 VENV = ROOT / "target" / "evo-venv"
-BIN = ROOT / "target" / "release" / "trajdrift"
+BIN = Path(os.environ.get("TRAJDRIFT_BIN", ROOT / "target" / "release" / "trajdrift"))
 DATA = ROOT / "target" / "bench-evo"
 SHARED = Path(os.environ.get("TRAJDRIFT_SHARED", ROOT.parent / "shared"))
 STATS = ["rmse", "mean", "median", "std", "min", "max", "sse"]
@@ -68,7 +68,7 @@ def ensure_evo():
 
 
 def run(cmd, cwd, nice=0):
-    """Runs cmd; returns (stdout, wall seconds, peak RSS bytes, exit code)."""
+    """Runs cmd; returns (stdout, wall seconds, peak RSS bytes, exit code, CPU seconds)."""
     start = time.perf_counter()
     p = subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                          preexec_fn=(lambda: os.nice(nice)) if nice else None)
@@ -76,7 +76,7 @@ def run(cmd, cwd, nice=0):
     _, status, usage = os.wait4(p.pid, 0)
     wall = time.perf_counter() - start
     p.returncode = os.waitstatus_to_exitcode(status)
-    return out, wall, usage.ru_maxrss * 1024, p.returncode
+    return out, wall, usage.ru_maxrss * 1024, p.returncode, usage.ru_utime + usage.ru_stime
 
 
 def stats(out):
@@ -97,8 +97,8 @@ def rows():
     data = SHARED / "evo-data"
     bad = 0
     for row in EXTRA_ROWS:
-        e, _, _, ec = run(evo_cmd(row), data, nice=10)
-        t, _, _, tc = run([str(BIN), *row.split()], data)
+        e, _, _, ec, _ = run(evo_cmd(row), data, nice=10)
+        t, _, _, tc, _ = run([str(BIN), *row.split()], data)
         se, st = stats(e), stats(t)
         same = se == st and ec == 0 and tc == 0
         bad += not same
@@ -135,19 +135,20 @@ def generate(n=1_000_000):
 
 def speed():
     ref, est = generate()
-    print(f"1 M-pose TUM pair: {ref} / {est}")
-    print(f"{'command':<34} {'tool':<10} {'wall s':>8} {'peak MB':>9} {'rmse':>10}")
+    print(f"1 M-pose TUM pair: {ref} / {est}  (load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")
+    print(f"{'command':<24} {'tool':<10} {'wall s':>8} {'CPU s':>8} {'peak MB':>9} {'rmse':>10}")
     for args in (["ape", "tum", str(ref), str(est), "-a"],
                  ["rpe", "tum", str(ref), str(est), "-d", "1", "-u", "m", "-a"]):
-        e_out, e_wall, e_rss, e_code = run(evo_cmd(" ".join(args)), ROOT, nice=10)
-        t_out, t_wall, t_rss, t_code = run([str(BIN), *args], ROOT)
+        e_out, e_wall, e_rss, e_code, e_cpu = run(evo_cmd(" ".join(args)), ROOT, nice=10)
+        t_out, t_wall, t_rss, t_code, t_cpu = run([str(BIN), *args], ROOT)
         label = " ".join(args[:1] + args[4:])
-        for tool, wall, rss, out, code in (("evo", e_wall, e_rss, e_out, e_code),
-                                           ("trajdrift", t_wall, t_rss, t_out, t_code)):
-            print(f"{label:<34} {tool:<10} {wall:>8.3f} {rss / 1e6:>9.1f} {stats(out)[0]:>10}"
+        for tool, wall, cpu, rss, out, code in (("evo", e_wall, e_cpu, e_rss, e_out, e_code),
+                                                ("trajdrift", t_wall, t_cpu, t_rss, t_out, t_code)):
+            print(f"{label:<24} {tool:<10} {wall:>8.3f} {cpu:>8.3f} {rss / 1e6:>9.1f} {stats(out)[0]:>10}"
                   + ("" if code == 0 else f"  (exit {code})"))
-        print(f"{label:<34} ratio      {e_wall / t_wall:>7.0f}x {e_rss / t_rss:>8.1f}x"
-              f" {'same rmse' if stats(e_out)[0] == stats(t_out)[0] else 'RMSE DIFFERS'}")
+        same = stats(e_out)[0] == stats(t_out)[0]
+        print(f"{label:<24} evo/ours   {e_wall / t_wall:>7.0f}x {e_cpu / t_cpu:>7.0f}x {e_rss / t_rss:>8.1f}x"
+              f" {'same rmse' if same else 'RMSE DIFFERS'}")
 
 
 if __name__ == "__main__":

@@ -288,3 +288,52 @@ fn eval_reports_ape_rpe_and_kitti_beside_drift_error() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert!(v["estimates"][0].get("standard_metrics").is_none());
 }
+
+/// `trajdrift offset`: the six methods in one table; on S-PTAM the correlation methods find the one
+/// frame lag and shifting by it lowers the APE.
+#[test]
+fn offset_compares_every_method() {
+    let Some(dir) = evo_data() else { return };
+    let out = run_in(
+        &dir,
+        &[
+            "offset",
+            "--reference-file",
+            "KITTI_00_gt.txt",
+            "--estimate-file",
+            "KITTI_00_SPTAM.txt",
+            "--kitti-times",
+            "KITTI_00_gt_times.txt",
+            "--json",
+            "-",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).expect("JSON");
+    let names: Vec<&str> = rows.iter().map(|r| r["method"].as_str().unwrap()).collect();
+    assert_eq!(
+        names,
+        [
+            "none",
+            "spatial",
+            "speed",
+            "curvature",
+            "signed-curvature",
+            "auto"
+        ]
+    );
+    let ape = |m: &str| {
+        rows.iter().find(|r| r["method"] == m).unwrap()["ape_rmse_m"]
+            .as_f64()
+            .unwrap()
+    };
+    let dt = rows.iter().find(|r| r["method"] == "speed").unwrap()["offset_s"]
+        .as_f64()
+        .unwrap();
+    assert!((dt - 0.104).abs() < 0.01, "speed Δt {dt}");
+    assert!(ape("speed") < ape("none") && ape("spatial") <= ape("speed") + 1e-9);
+}

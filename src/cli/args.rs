@@ -30,6 +30,8 @@ pub enum Command {
     Ape(Box<ApeArgs>),
     /// Relative pose error, evo's `evo_rpe` command line and numbers (`trajdrift rpe tum REF EST -d 1 -u m`).
     Rpe(Box<RpeArgs>),
+    /// Every clock-offset method side by side (none, spatial, speed, curvature, signed curvature, auto).
+    Offset(Box<OffsetArgs>),
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -501,4 +503,14 @@ pub struct RpeArgs {
     /// Choose the pairs on the reference instead of the estimate.
     #[arg(long = "pairs_from_reference", alias = "pairs-from-reference")]
     pub pairs_from_reference: bool,
+}
+
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct OffsetArgs {
+    #[command(flatten)]
+    pub common: MetricArgs,
+    /// The spatial method searches Δt in ±S seconds.
+    #[arg(long, value_name = "S", default_value_t = 5.0)]
+    pub spatial_range: f64,
 }

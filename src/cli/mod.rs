@@ -45,6 +45,7 @@ pub fn run(cli: args::Cli) -> ExitCode {
         args::Command::Export(a) => commands::export::run(a),
         args::Command::Ape(a) => commands::ape::run(*a),
         args::Command::Rpe(a) => commands::rpe::run(*a),
+        args::Command::Offset(a) => commands::offset::run(*a),
     };
     match result {
         Ok(code) => ExitCode::from(code),

@@ -6,6 +6,7 @@ pub mod eval;
 pub mod export;
 pub mod merge;
 pub mod metric;
+pub mod offset;
 pub mod rpe;
 pub mod simulate;
 pub mod topics;

@@ -9,6 +9,7 @@ pub mod associate;
 pub mod in_eval;
 pub mod inputs;
 pub mod kitti_drift;
+pub mod offsets;
 pub mod poses;
 pub mod relation;
 pub mod rpe;
