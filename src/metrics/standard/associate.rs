@@ -27,7 +27,57 @@ pub fn matching_time_indices(
     max_diff: f64,
     offset_b: f64,
 ) -> (Vec<u32>, Vec<u32>) {
-    let (mut ia, mut ib) = (Vec::new(), Vec::new());
+    let (ia, ib) = match_ids(a, b, max_diff, offset_b);
+    (ia.into_vec(), ib)
+}
+
+/// The matched indices of the first trajectory: all of them in order (no list kept: at millions of
+/// poses that is memory), or the list.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Ids {
+    /// `0..n`.
+    All(usize),
+    List(Vec<u32>),
+}
+
+impl Ids {
+    fn push(&mut self, i: usize) {
+        match self {
+            Ids::All(n) if *n == i => *n += 1,
+            Ids::All(n) => {
+                let mut v: Vec<u32> = (0..*n as u32).collect();
+                v.push(i as u32);
+                *self = Ids::List(v);
+            }
+            Ids::List(v) => v.push(i as u32),
+        }
+    }
+
+    /// Number of matched indices.
+    pub fn len(&self) -> usize {
+        match self {
+            Ids::All(n) => *n,
+            Ids::List(v) => v.len(),
+        }
+    }
+
+    /// True when nothing matched.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The indices as a list.
+    pub fn into_vec(self) -> Vec<u32> {
+        match self {
+            Ids::All(n) => (0..n as u32).collect(),
+            Ids::List(v) => v,
+        }
+    }
+}
+
+/// [`matching_time_indices`] with the first side's indices as [`Ids`].
+fn match_ids(a: &[f64], b: &[f64], max_diff: f64, offset_b: f64) -> (Ids, Vec<u32>) {
+    let (mut ia, mut ib) = (Ids::All(0), Vec::new());
     if b.is_empty() {
         return (ia, ib);
     }
@@ -43,7 +93,7 @@ pub fn matching_time_indices(
                 }
             }
             if (at(best) - t).abs() <= max_diff {
-                ia.push(i as u32);
+                ia.push(i);
                 ib.push(best as u32);
             }
         }
@@ -84,7 +134,7 @@ pub fn matching_time_indices(
         } else {
             continue;
         };
-        ia.push(i as u32);
+        ia.push(i);
         ib.push(best as u32);
     }
     (ia, ib)
@@ -107,7 +157,7 @@ pub fn associate(
     let est_longer = estimate.len() > reference.len();
     let (ts, tl) = if est_longer { (tr, te) } else { (te, tr) };
     let off = if est_longer { offset_s } else { -offset_s };
-    let (is, il) = matching_time_indices(ts, tl, max_diff, off);
+    let (is, il) = match_ids(ts, tl, max_diff, off);
     if is.is_empty() {
         return Err(no_pairs(tr, te, max_diff, offset_s));
     }
@@ -116,8 +166,10 @@ pub fn associate(
     } else {
         (estimate, reference)
     };
-    let short = short.select(&is);
-    drop(is);
+    let short = match is {
+        Ids::All(n) if n == short.len() => short,
+        other => short.select(&other.into_vec()),
+    };
     let long = match method {
         SyncMethod::NearestTime => long.select(&il),
         SyncMethod::Interpolation => {
