@@ -46,6 +46,9 @@ impl DeltaUnit {
     }
 }
 
+/// One RPE pose pair `(i, j)`.
+pub type Pair = (usize, usize);
+
 /// How RPE pairs are chosen.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PairSelection {
@@ -220,7 +223,7 @@ pub fn rpe_errors(
     estimate: &Poses,
     relation: PoseRelation,
     sel: &PairSelection,
-) -> Result<(Vec<f64>, Vec<(usize, usize)>)> {
+) -> Result<(Vec<f64>, Vec<Pair>)> {
     if reference.len() != estimate.len() {
         return Err(Error::Metric(format!(
             "RPE pairs poses one to one: the reference has {} and the estimate {}",
