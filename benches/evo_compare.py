@@ -24,7 +24,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 VENV = ROOT / "target" / "evo-venv"
-BIN = Path(os.environ.get("TRAJDRIFT_BIN", ROOT / "target" / "release" / "trajdrift"))
+BIN = Path(os.environ.get("TRAJDRIFT_BIN", ROOT / "target" / "release" / "trajdrift")).resolve()
 DATA = ROOT / "target" / "bench-evo"
 SHARED = Path(os.environ.get("TRAJDRIFT_SHARED", ROOT.parent / "shared"))
 STATS = ["rmse", "mean", "median", "std", "min", "max", "sse"]

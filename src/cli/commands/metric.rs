@@ -132,7 +132,12 @@ pub fn run(a: &MetricArgs, metric: Metric) -> Result<u8> {
         reference,
         estimate,
         ..
-    } = inputs.load(&|_| {})?;
+    } = {
+        let alignment = pipeline(a, offset).alignment;
+        let orientation =
+            trajdrift::metrics::standard::needs_orientation(metric, relation, alignment);
+        inputs.load_with(&|_| {}, orientation)?
+    };
     let pipeline = pipeline(a, offset);
     let result =
         trajdrift::metrics::standard::evaluate(reference, estimate, metric, relation, &pipeline)?;

@@ -11,7 +11,7 @@ use crate::eval::config::{EvalConfig, NamedInput};
 use crate::sources::euroc::read_euroc;
 use crate::sources::kitti::read_kitti_matrices;
 use crate::sources::text::{detect_format, TextFormat};
-use crate::sources::tum::read_tum_rows;
+use crate::sources::tum::read_tum_rows_with;
 use crate::sources::Progress;
 
 /// evo's format word.
@@ -98,12 +98,18 @@ impl MetricInputs {
 
     /// Reads both trajectories.
     pub fn load(&self, progress: Progress<'_>) -> Result<LoadedPair> {
+        self.load_with(progress, true)
+    }
+
+    /// [`MetricInputs::load`]; TUM text files skip their orientation columns unless `orientation`
+    /// (see [`super::needs_orientation`]).
+    pub fn load_with(&self, progress: Progress<'_>, orientation: bool) -> Result<LoadedPair> {
         match self {
             MetricInputs::Text {
                 format,
                 reference,
                 estimate,
-            } => load_text(*format, reference, estimate),
+            } => load_text(*format, reference, estimate, orientation),
             MetricInputs::Eval(c) => {
                 let inputs = crate::eval::inputs::load(c, progress)?;
                 let est = inputs.estimates.first().ok_or_else(|| {
@@ -151,11 +157,16 @@ impl MetricInputs {
 
 /// Reads evo's text forms after checking the files are in that format. Rows are kept as written
 /// (evo neither sorts nor drops repeated stamps) and KITTI rotations as written (not re-orthonormalised).
-fn load_text(format: EvoFormat, reference: &Path, estimate: &Path) -> Result<LoadedPair> {
+fn load_text(
+    format: EvoFormat,
+    reference: &Path,
+    estimate: &Path,
+    orientation: bool,
+) -> Result<LoadedPair> {
     let tum = |path: &Path| -> Result<Poses> {
         check_format(path, TextFormat::Tum, format)?;
         Ok(Poses::from_trajectory(
-            read_tum_rows(path)?,
+            read_tum_rows_with(path, orientation)?,
             Some(StampSeconds::Decimal),
         ))
     };

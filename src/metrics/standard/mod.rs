@@ -178,6 +178,22 @@ pub struct DeltaReport {
     pub pairs_from_reference: bool,
 }
 
+/// Whether `metric` with `relation` reads orientations (and `alignment` uses them): RPE's translation
+/// part is expressed in the body frame of its first pose, angle deltas need rotations, APE only for
+/// the rotation relations.
+pub fn needs_orientation(metric: Metric, relation: PoseRelation, alignment: Alignment) -> bool {
+    let point = matches!(
+        relation,
+        PoseRelation::PointDistance | PoseRelation::PointDistanceErrorRatio
+    );
+    alignment == Alignment::Origin
+        || match metric {
+            Metric::Rpe(s) if matches!(s.unit, DeltaUnit::Degrees | DeltaUnit::Radians) => true,
+            Metric::Rpe(_) => !point,
+            Metric::Ape => relation.needs_orientation(),
+        }
+}
+
 /// Computes `metric` of `estimate` against `reference`, evo's way. Stamped trajectories are associated
 /// by time; paths (`stamps_s: None`, KITTI) are paired by index and must have the same length.
 pub fn evaluate(
