@@ -91,6 +91,11 @@ pub enum Error {
     #[error("{0}")]
     InvalidArgument(String),
 
+    /// A standard metric (APE, RPE) cannot be computed on these data (no associated pairs, a degenerate
+    /// alignment, a relation that needs orientation): the message says what to do.
+    #[error("{0}")]
+    Metric(String),
+
     /// Writing an output failed.
     #[error("{path}: cannot write: {detail}")]
     Output { path: PathBuf, detail: String },

@@ -61,6 +61,12 @@ pub struct MissionEntry {
     pub offset_status: String,
     pub confidence: Option<f64>,
     pub de_rmse: Option<f64>,
+    /// evo's APE (SE(3), translation) RMSE on the time-aligned estimate, m (`--metrics ape`).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub ape_rmse_m: Option<f64>,
+    /// evo's RPE over 1 m (translation) RMSE, m (`--metrics rpe`).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub rpe_1m_rmse_m: Option<f64>,
 }
 
 /// One estimate name at one window size across missions.
@@ -116,6 +122,8 @@ impl Summary {
                             offset_status: e.time_offset.status.clone(),
                             confidence: e.time_offset.confidence,
                             de_rmse: d.rmse,
+                            ape_rmse_m: standard_rmse(e, |m| m.ape.as_ref()),
+                            rpe_1m_rmse_m: standard_rmse(e, |m| m.rpe_1m.as_ref()),
                         });
                 }
             }
@@ -179,7 +187,7 @@ impl Summary {
     /// One CSV row per mission, estimate and window; failed missions with their error.
     pub fn to_csv(&self) -> String {
         let mut s = String::from(
-            "mission,estimate,window_m,status,dt_s,offset_status,confidence,de_rmse,error\n",
+            "mission,estimate,window_m,status,dt_s,offset_status,confidence,de_rmse,error,ape_rmse_m,rpe_1m_rmse_m\n",
         );
         let opt = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
         let mut rows: Vec<(String, String)> = Vec::new();
@@ -188,14 +196,16 @@ impl Summary {
                 rows.push((
                     m.mission.clone(),
                     format!(
-                        "{},{},{},ok,{},{},{},{},\n",
+                        "{},{},{},ok,{},{},{},{},,{},{}\n",
                         csv(&m.mission),
                         csv(&e.estimate),
                         e.window_m,
                         m.dt_s,
                         m.offset_status,
                         opt(m.confidence),
-                        opt(m.de_rmse)
+                        opt(m.de_rmse),
+                        opt(m.ape_rmse_m),
+                        opt(m.rpe_1m_rmse_m)
                     ),
                 ));
             }
@@ -203,7 +213,7 @@ impl Summary {
         for f in &self.failed {
             rows.push((
                 f.mission.clone(),
-                format!("{},,,failed,,,,,{}\n", csv(&f.mission), csv(&f.error)),
+                format!("{},,,failed,,,,,{},,\n", csv(&f.mission), csv(&f.error)),
             ));
         }
         rows.sort_by(|a, b| a.0.cmp(&b.0));
@@ -217,6 +227,7 @@ impl Summary {
     pub fn to_markdown(&self) -> String {
         let mut s = String::from("# trajdrift batch summary\n\n");
         let pct = |v: Option<f64>| v.map_or("–".into(), |x| format!("{:.2} %", 100.0 * x));
+        let metres = |v: Option<f64>| v.map_or("–".into(), |x| format!("{x:.4}"));
         let _ = writeln!(
             s,
             "{} missions, {} failed, {} with a weak offset.\n",
@@ -237,17 +248,19 @@ impl Summary {
                 pct(e.de_rmse_q3)
             );
             s.push_str(
-                "| mission | Δt (s) | offset | confidence | DE RMSE |\n|---|---:|---|---:|---:|\n",
+                "| mission | Δt (s) | offset | confidence | DE RMSE | APE RMSE (m) | RPE 1 m RMSE (m) |\n|---|---:|---|---:|---:|---:|---:|\n",
             );
             for m in &e.missions {
                 let _ = writeln!(
                     s,
-                    "| {} | {:+.4} | {} | {} | {} |",
+                    "| {} | {:+.4} | {} | {} | {} | {} | {} |",
                     m.mission,
                     m.dt_s,
                     m.offset_status,
                     m.confidence.map_or("–".into(), |c| format!("{c:.2}")),
-                    pct(m.de_rmse)
+                    pct(m.de_rmse),
+                    metres(m.ape_rmse_m),
+                    metres(m.rpe_1m_rmse_m)
                 );
             }
             s.push('\n');
@@ -334,4 +347,17 @@ pub fn read_results(dirs: &[PathBuf]) -> Result<Vec<MissionResult>> {
         )));
     }
     Ok(out)
+}
+
+/// The RMSE of one standard metric of an estimate, when computed.
+fn standard_rmse(
+    e: &crate::report::json::EstimateReport,
+    pick: impl Fn(
+        &crate::metrics::standard::in_eval::StandardMetrics,
+    ) -> Option<&crate::metrics::standard::MetricResult>,
+) -> Option<f64> {
+    e.standard_metrics
+        .as_ref()
+        .and_then(pick)
+        .map(|r| r.stats.rmse)
 }

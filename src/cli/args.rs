@@ -31,6 +31,12 @@ pub enum Command {
     Export(ExportArgs),
     /// Re-run the evaluation over one parameter's values: DIR/sweep.csv and DIR/sweep.svg.
     Sweep(Box<SweepArgs>),
+    /// Absolute pose error, evo's `evo_ape` command line and numbers (`trajdrift ape tum REF EST -a`).
+    Ape(Box<ApeArgs>),
+    /// Relative pose error, evo's `evo_rpe` command line and numbers (`trajdrift rpe tum REF EST -d 1 -u m`).
+    Rpe(Box<RpeArgs>),
+    /// Every clock-offset method side by side (none, spatial, speed, curvature, signed curvature, auto).
+    Offset(Box<OffsetArgs>),
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -343,4 +349,136 @@ pub struct SweepArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub eval: EvalArgs,
+}
+
+/// The inputs and pipeline flags shared by `ape` and `rpe` (evo's spelling, plus trajdrift's own).
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct MetricArgs {
+    /// evo's form `tum|kitti|euroc REF EST` or `bag|bag2|mcap RECORDING REF_TOPIC EST_TOPIC`, or a
+    /// RECORDING with --reference/--estimate (TF chains /tf:PARENT:CHILD work), or nothing with
+    /// --reference-file/--estimate-file.
+    #[arg(value_name = "FORMAT|RECORDING", num_args = 0..=4)]
+    pub inputs: Vec<String>,
+    /// Reference topic (native form).
+    #[arg(long, value_name = "TOPIC")]
+    pub reference: Option<String>,
+    /// Reference text file (native form; TUM, KITTI, EuRoC, CSV).
+    #[arg(long, value_name = "FILE", conflicts_with = "reference")]
+    pub reference_file: Option<PathBuf>,
+    /// Estimate topic (native form).
+    #[arg(long, value_name = "TOPIC")]
+    pub estimate: Option<String>,
+    /// Estimate text file (native form).
+    #[arg(long, value_name = "FILE", conflicts_with = "estimate")]
+    pub estimate_file: Option<PathBuf>,
+    /// A preset's reference and first estimate (native form).
+    #[arg(long, value_name = "NAME|FILE")]
+    pub preset: Option<String>,
+    /// Which stamp to use (native form): header or log.
+    #[arg(long, value_name = "WORD", default_value = "header", value_parser = word::<StampSource>())]
+    pub stamp: StampSource,
+    #[command(flatten)]
+    pub text: TextArgs,
+    /// Pose relation.
+    #[arg(short = 'r', long = "pose_relation", alias = "pose-relation", default_value = "trans_part",
+          value_parser = ["trans_part", "rot_part", "full", "angle_deg", "angle_rad", "point_distance", "point_distance_error_ratio"])]
+    pub pose_relation: String,
+    /// Umeyama SE(3) alignment on positions (evo -a).
+    #[arg(short = 'a', long = "align")]
+    pub align: bool,
+    /// Correct scale: Sim(3) with -a, scale only without (evo -s).
+    #[arg(short = 's', long = "correct_scale", alias = "correct-scale")]
+    pub correct_scale: bool,
+    /// Align on the first N pairs only.
+    #[arg(long = "n_to_align", alias = "n-to-align", value_name = "N")]
+    pub n_to_align: Option<usize>,
+    /// Move the estimate's first pose onto the reference's.
+    #[arg(long = "align_origin", alias = "align-origin", conflicts_with_all = ["align", "align_yaw"])]
+    pub align_origin: bool,
+    /// 4-DoF alignment (yaw + translation) for gravity-aligned frames (not in evo).
+    #[arg(long = "align-yaw", conflicts_with_all = ["align", "correct_scale"])]
+    pub align_yaw: bool,
+    /// Largest stamp difference of an associated pair, seconds.
+    #[arg(
+        long = "t_max_diff",
+        alias = "t-max-diff",
+        value_name = "S",
+        default_value_t = 0.01
+    )]
+    pub t_max_diff: f64,
+    /// Known offset added to the estimate's stamps for association, seconds (evo --t_offset).
+    #[arg(
+        long = "t_offset",
+        value_name = "S",
+        allow_hyphen_values = true,
+        conflicts_with = "time_offset"
+    )]
+    pub t_offset: Option<f64>,
+    /// Offset added to the estimate's stamps, seconds, or `auto`: found by eval's machinery.
+    #[arg(
+        long = "time-offset",
+        value_name = "S|auto",
+        allow_hyphen_values = true
+    )]
+    pub time_offset: Option<String>,
+    /// Crop the reference from this stamp, seconds (its own clock).
+    #[arg(long = "t_start", value_name = "S", allow_hyphen_values = true)]
+    pub t_start: Option<f64>,
+    /// Crop the reference up to this stamp, seconds.
+    #[arg(long = "t_end", value_name = "S", allow_hyphen_values = true)]
+    pub t_end: Option<f64>,
+    /// Association: snap to the nearest pose, or interpolate the longer trajectory.
+    #[arg(long = "sync_method", alias = "sync-method", default_value = "nearest_time",
+          value_parser = ["nearest_time", "interpolation"])]
+    pub sync_method: String,
+    /// Project both trajectories to a plane after alignment.
+    #[arg(long = "project_to_plane", alias = "project-to-plane", value_parser = ["xy", "xz", "yz"])]
+    pub project_to_plane: Option<String>,
+    /// Write the result as JSON to FILE (`-` = stdout).
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+pub struct ApeArgs {
+    #[command(flatten)]
+    pub common: MetricArgs,
+}
+
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct RpeArgs {
+    #[command(flatten)]
+    pub common: MetricArgs,
+    /// Delta between the poses of a pair.
+    #[arg(short = 'd', long = "delta", default_value_t = 1.0)]
+    pub delta: f64,
+    /// Unit of delta: f (frames), m (metres of path), d (degrees), r (radians).
+    #[arg(short = 'u', long = "delta_unit", alias = "delta-unit", default_value = "f", value_parser = ["f", "m", "d", "r"])]
+    pub delta_unit: String,
+    /// Relative tolerance of the delta in --all_pairs mode.
+    #[arg(
+        short = 't',
+        long = "delta_tol",
+        alias = "delta-tol",
+        default_value_t = 0.1
+    )]
+    pub delta_tol: f64,
+    /// Every pair at the delta, not consecutive ones.
+    #[arg(long = "all_pairs", alias = "all-pairs")]
+    pub all_pairs: bool,
+    /// Choose the pairs on the reference instead of the estimate.
+    #[arg(long = "pairs_from_reference", alias = "pairs-from-reference")]
+    pub pairs_from_reference: bool,
+}
+
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct OffsetArgs {
+    #[command(flatten)]
+    pub common: MetricArgs,
+    /// The spatial method searches Δt in ±S seconds.
+    #[arg(long, value_name = "S", default_value_t = 5.0)]
+    pub spatial_range: f64,
 }

@@ -33,6 +33,9 @@ pub fn run(cli: args::Cli) -> ExitCode {
         args::Command::Merge(a) => commands::merge::run(a),
         args::Command::Export(a) => commands::export::run(a),
         args::Command::Sweep(a) => commands::sweep::run(*a),
+        args::Command::Ape(a) => commands::ape::run(*a),
+        args::Command::Rpe(a) => commands::rpe::run(*a),
+        args::Command::Offset(a) => commands::offset::run(*a),
     };
     match result {
         Ok(code) => ExitCode::from(code),

@@ -219,6 +219,9 @@ pub struct EvalConfig {
     /// `--estimate-lever [NAME=]X,Y,Z|tf-static:[BODY:]FRAME`: estimate sensors relative to the common
     /// body point; `None` as name applies to every estimate without a named one.
     pub estimate_levers: Vec<(Option<String>, LeverSpec)>,
+    /// `--metrics de,ape,rpe,kitti`: which metrics each estimate gets (evo's APE/RPE on the
+    /// time-aligned estimate beside Drift Error).
+    pub metrics: crate::metrics::standard::in_eval::MetricSet,
 }
 
 impl EvalConfig {
@@ -256,6 +259,7 @@ impl EvalConfig {
             text: TextOptions::default(),
             reference_lever: None,
             estimate_levers: Vec::new(),
+            metrics: Default::default(),
         }
     }
 

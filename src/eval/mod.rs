@@ -359,19 +359,30 @@ fn evaluate_estimate(
         });
     }
     let t0_s = t0_ns as f64 * 1e-9;
+    let standard_metrics = config.metrics.any_standard().then(|| {
+        crate::metrics::standard::in_eval::standard_metrics(
+            &reference.trajectory,
+            &aligned,
+            &config.metrics,
+        )
+    });
     let params = config.drift_params(config.windows_m[0]);
-    let drift = drift_error_windows(
-        &ref_t,
-        ref_p,
-        &aligned_t,
-        &aligned.positions,
-        &params,
-        &config.windows_m,
-    )
-    .map_err(|e| relabel(e, &est.label))?
-    .iter()
-    .map(|r| drift_report(r, t0_s))
-    .collect();
+    let drift = if config.metrics.de {
+        drift_error_windows(
+            &ref_t,
+            ref_p,
+            &aligned_t,
+            &aligned.positions,
+            &params,
+            &config.windows_m,
+        )
+        .map_err(|e| relabel(e, &est.label))?
+        .iter()
+        .map(|r| drift_report(r, t0_s))
+        .collect()
+    } else {
+        Vec::new()
+    };
     if let Some(file) = &config.export_aligned {
         export::write_aligned(
             &export::aligned_path(file, &est.name, n_estimates),
@@ -388,6 +399,7 @@ fn evaluate_estimate(
             time_offset,
             drift_error: drift,
             extrinsics: None,
+            standard_metrics,
         },
         warnings,
     ))

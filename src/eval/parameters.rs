@@ -12,6 +12,7 @@ use crate::align::time_offset::OffsetMethod;
 use crate::error::Result;
 use crate::eval::config::{EvalConfig, Platform};
 use crate::metrics::lever::LeverCorrection;
+use crate::metrics::standard::in_eval::{EvalMetric, MetricSet};
 use crate::sources::StampSource;
 
 /// Every evaluation parameter; `None` = not set at this layer.
@@ -84,6 +85,12 @@ pub struct Parameters {
     /// Crop end, like --t-start.
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub t_end: Option<f64>,
+    /// Metrics beside the offset: de (Drift Error), ape (evo's APE, SE(3)), rpe (evo's RPE over 1 m
+    /// and point distance), kitti (KITTI segment drift); evo's on the time-aligned estimate
+    /// [default: de,ape,rpe].
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = word::<EvalMetric>())]
+    #[serde(default, deserialize_with = "opt_words")]
+    pub metrics: Option<Vec<EvalMetric>>,
 }
 
 impl Parameters {
@@ -108,6 +115,7 @@ impl Parameters {
             time_offset: self.time_offset.or(lower.time_offset),
             t_start: self.t_start.or(lower.t_start),
             t_end: self.t_end.or(lower.t_end),
+            metrics: self.metrics.or(lower.metrics),
         }
     }
 
@@ -148,6 +156,9 @@ impl Parameters {
         c.time_offset_s = self.time_offset.or(c.time_offset_s);
         c.t_start = self.t_start.or(c.t_start);
         c.t_end = self.t_end.or(c.t_end);
+        if let Some(m) = &self.metrics {
+            c.metrics = MetricSet::of(m);
+        }
         Ok(())
     }
 }
@@ -230,6 +241,37 @@ fn opt_word<'de, D: Deserializer<'de>, T: Word>(d: D) -> Result<Option<T>, D::Er
         .ok_or_else(|| serde::de::Error::custom(format!("`{w}`: expected {}", T::choices())))
 }
 
+/// serde's reader for an optional list of [`Word`]s.
+fn opt_words<'de, D: Deserializer<'de>, T: Word>(d: D) -> Result<Option<Vec<T>>, D::Error> {
+    let words = Vec::<String>::deserialize(d)?;
+    words
+        .iter()
+        .map(|w| {
+            T::from_word(w).ok_or_else(|| {
+                serde::de::Error::custom(format!("`{w}`: expected {}", T::choices()))
+            })
+        })
+        .collect::<Result<Vec<T>, D::Error>>()
+        .map(Some)
+}
+
+impl Word for EvalMetric {
+    const ALL: &'static [Self] = &[
+        EvalMetric::De,
+        EvalMetric::Ape,
+        EvalMetric::Rpe,
+        EvalMetric::Kitti,
+    ];
+    fn word(self) -> &'static str {
+        match self {
+            EvalMetric::De => "de",
+            EvalMetric::Ape => "ape",
+            EvalMetric::Rpe => "rpe",
+            EvalMetric::Kitti => "kitti",
+        }
+    }
+}
+
 /// Parses `a,b,c` into three numbers (clap's parser for `--origin` and other triples).
 pub fn triple(s: &str) -> std::result::Result<[f64; 3], String> {
     let bad = || format!("takes three comma-separated numbers, got `{s}`");
@@ -291,6 +333,7 @@ mod tests {
                 "offset_method" => "speed",
                 "origin" => "1,2,3",
                 "window" => "7",
+                "metrics" => "kitti",
                 _ => "0.5",
             };
             let one = from_flags(&[&format!("--{}", id.replace('_', "-")), value]);

@@ -124,6 +124,9 @@ pub struct EstimateReport {
     /// the reference's body point before curvature, alignment and Drift Error.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub extrinsics: Option<ExtrinsicsReport>,
+    /// evo's APE/RPE (and KITTI drift) on the time-aligned estimate (`--metrics`).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub standard_metrics: Option<crate::metrics::standard::in_eval::StandardMetrics>,
 }
 
 /// The lever arms used to move an estimate onto the reference's point of the body.

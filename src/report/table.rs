@@ -85,6 +85,9 @@ pub fn render(report: &Report) -> String {
                 d.discarded_fraction * 100.0
             );
         }
+        if let Some(m) = &e.standard_metrics {
+            standard_lines(&mut s, m);
+        }
         if let Some(d) = e.drift_error.first() {
             if !d.excluded_intervals.is_empty() {
                 let _ = writeln!(
@@ -99,4 +102,32 @@ pub fn render(report: &Report) -> String {
         let _ = writeln!(s, "\nwarning [{}]: {}", w.code, w.message);
     }
     s
+}
+
+/// evo's APE/RPE (and KITTI drift) lines of one estimate.
+fn standard_lines(s: &mut String, m: &crate::metrics::standard::in_eval::StandardMetrics) {
+    for (label, r) in [
+        ("APE (SE(3))", &m.ape),
+        ("RPE 1 m", &m.rpe_1m),
+        ("RPE 1 m point distance", &m.rpe_point_distance_1m),
+    ] {
+        if let Some(r) = r {
+            let st = &r.stats;
+            let _ = writeln!(
+                s,
+                "  {label:<23} rmse {:.4} m  mean {:.4}  median {:.4}  max {:.4}  pairs {}",
+                st.rmse, st.mean, st.median, st.max, r.pairs
+            );
+        }
+    }
+    if let Some(k) = &m.kitti {
+        let _ = writeln!(
+            s,
+            "  {:<23} t_err {:.3} %  r_err {:.4} deg/100 m  ({} segments)",
+            "KITTI drift", k.t_err_pct, k.r_err_deg_per_100m, k.segments
+        );
+    }
+    for n in &m.notes {
+        let _ = writeln!(s, "  note: {n}");
+    }
 }

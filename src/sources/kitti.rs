@@ -22,9 +22,71 @@ const HINT: &str = "expected KITTI rows of 12 numbers (a 3x4 pose matrix, row-ma
 /// Reads a KITTI pose file, stamped by `times` (a KITTI `times.txt`) when given, else `i · 0.1 s`.
 pub fn read_kitti(path: &Path, times: Option<&Path>) -> Result<Trajectory> {
     let stamps = times.map(read_times).transpose()?;
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut traj = Trajectory::new(true);
     let mut row = 0usize;
+    for_each_row(path, |i, v| {
+        let bad = |detail: String| Error::Text {
+            path: path.to_path_buf(),
+            line: i + 1,
+            detail,
+            hint: HINT.into(),
+        };
+        let stamp = match &stamps {
+            Some(s) => *s.get(row).ok_or_else(|| {
+                bad(format!(
+                    "pose {} has no time: the times file has only {} rows",
+                    row + 1,
+                    s.len()
+                ))
+            })?,
+            None => row as i64 * KITTI_DEFAULT_PERIOD_NS,
+        };
+        row += 1;
+        let (m, p) = matrix_of(v);
+        if !p.iter().all(|x| x.is_finite()) || !m.iter().all(|x| x.is_finite()) {
+            return Ok(());
+        }
+        // The matrices are rounded to 7 digits: project onto the nearest rotation.
+        let r = Rotation3::from_matrix(&m);
+        traj.push(stamp, p, Some(UnitQuaternion::from_rotation_matrix(&r)));
+        Ok(())
+    })?;
+    if let Some(s) = &stamps {
+        if s.len() != row {
+            return Err(Error::Text {
+                path: path.to_path_buf(),
+                line: 0,
+                detail: format!("{row} poses but {} times in the times file", s.len()),
+                hint: "pass the times.txt of the same sequence".into(),
+            });
+        }
+    }
+    traj.sort_dedup();
+    Ok(traj)
+}
+
+/// The rows of a KITTI pose file as written: the rotation part unprojected (evo computes with these
+/// matrices, and its RPE over 100 m moves in the 6th decimal if they are made orthonormal), one entry
+/// per row.
+pub fn read_kitti_matrices(path: &Path) -> Result<Vec<(Matrix3<f64>, Vector3<f64>)>> {
+    let mut out = Vec::new();
+    for_each_row(path, |_, v| {
+        out.push(matrix_of(v));
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+fn matrix_of(v: &[f64]) -> (Matrix3<f64>, Vector3<f64>) {
+    (
+        Matrix3::new(v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10]),
+        Vector3::new(v[3], v[7], v[11]),
+    )
+}
+
+/// Calls `f(line index, 12 values)` for every pose row; a row of another width is an error.
+fn for_each_row(path: &Path, mut f: impl FnMut(usize, &[f64]) -> Result<()>) -> Result<()> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     for (i, line) in BufReader::new(file).lines().enumerate() {
         let line = line.map_err(|e| Error::io(path, e))?;
         let line = line.trim();
@@ -47,38 +109,9 @@ pub fn read_kitti(path: &Path, times: Option<&Path>) -> Result<Trajectory> {
         if v.len() != 12 {
             return Err(bad(format!("{} values on the line", v.len())));
         }
-        let stamp = match &stamps {
-            Some(s) => *s.get(row).ok_or_else(|| {
-                bad(format!(
-                    "pose {} has no time: the times file has only {} rows",
-                    row + 1,
-                    s.len()
-                ))
-            })?,
-            None => row as i64 * KITTI_DEFAULT_PERIOD_NS,
-        };
-        row += 1;
-        let m = Matrix3::new(v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10]);
-        let p = Vector3::new(v[3], v[7], v[11]);
-        if !p.iter().all(|x| x.is_finite()) || !m.iter().all(|x| x.is_finite()) {
-            continue;
-        }
-        // The matrices are rounded to 7 digits: project onto the nearest rotation.
-        let r = Rotation3::from_matrix(&m);
-        traj.push(stamp, p, Some(UnitQuaternion::from_rotation_matrix(&r)));
+        f(i, &v)?;
     }
-    if let Some(s) = &stamps {
-        if s.len() != row {
-            return Err(Error::Text {
-                path: path.to_path_buf(),
-                line: 0,
-                detail: format!("{row} poses but {} times in the times file", s.len()),
-                hint: "pass the times.txt of the same sequence".into(),
-            });
-        }
-    }
-    traj.sort_dedup();
-    Ok(traj)
+    Ok(())
 }
 
 /// Reads a KITTI `times.txt`: one time in seconds a row.

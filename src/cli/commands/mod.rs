@@ -1,9 +1,13 @@
 //! One handler per command: turn arguments into a library call, print the result.
 
+pub mod ape;
 pub mod batch;
 pub mod eval;
 pub mod export;
 pub mod merge;
+pub mod metric;
+pub mod offset;
+pub mod rpe;
 pub mod simulate;
 pub mod sweep;
 pub mod topics;

@@ -1,0 +1,20 @@
+//! `trajdrift rpe`: relative pose error with evo's command line and numbers (pairs from the estimate by
+//! default; `-u m` restarts the path length after each pair).
+
+use anyhow::Result;
+
+use trajdrift::metrics::standard::{DeltaUnit, Metric, PairSelection};
+
+use crate::cli::args::RpeArgs;
+
+/// Runs the command; returns the exit code.
+pub fn run(a: RpeArgs) -> Result<u8> {
+    let sel = PairSelection {
+        delta: a.delta,
+        unit: DeltaUnit::parse(&a.delta_unit)?,
+        rel_tol: a.delta_tol,
+        all_pairs: a.all_pairs,
+        from_reference: a.pairs_from_reference,
+    };
+    super::metric::run(&a.common, Metric::Rpe(sel))
+}
