@@ -202,42 +202,140 @@ pub fn estimate_time_offset_excluding(
             .map(|a| a.estimate);
     }
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
-    let signal = |t: &[f64], p: &[Vector3<f64>], what: &str| -> Result<(Vec<f64>, Vec<f64>)> {
-        let s: (Vec<f64>, Vec<f64>) = match method {
-            OffsetMethod::Curvature => curvature_signature(t, p, &params.curvature)
-                .into_iter()
-                .map(|s| (s.t, s.curvature))
-                .unzip(),
-            OffsetMethod::SignedCurvature | OffsetMethod::Auto => {
-                curvature_signature(t, p, &params.curvature)
-                    .into_iter()
-                    .map(|s| (s.t, s.signed_curvature()))
-                    .unzip()
-            }
-            OffsetMethod::Speed => {
-                let noise = reference_noise(t, p).unwrap_or(0.0);
-                speed_profile(t, p, params.speed_window_s, gap, noise)
-            }
-            .into_iter()
-            .map(|s| (s.t, s.speed))
-            .unzip(),
-        };
-        if s.0.len() < 3 {
-            return Err(Error::TooFewSamples {
-                what: format!("{what} {} signal", method.as_str()),
-                n: s.0.len(),
-                need: 3,
-            });
-        }
-        Ok(s)
-    };
-    let (rt, rv) = without(signal(ref_t, ref_p, "reference")?, ref_exclude);
-    let (et, ev) = without(signal(est_t, est_p, "estimate")?, est_exclude);
+    let (rt, rv, rw) = without(
+        method_signal(method, ref_t, ref_p, params, "reference")?,
+        ref_exclude,
+    );
+    let (et, ev, ew) = without(
+        method_signal(method, est_t, est_p, params, "estimate")?,
+        est_exclude,
+    );
     let centering = match method {
         OffsetMethod::Speed if params.speed_mean_removed => Centering::MeanRemoved,
         OffsetMethod::SignedCurvature | OffsetMethod::Auto => Centering::MeanRemoved,
         _ => Centering::Raw,
     };
+    let first = search(method, (&rt, &rv), (&et, &ev), params, centering, gap)?;
+    if method != OffsetMethod::Speed {
+        return Ok(first);
+    }
+    // A lateral lever arm: the estimate's sensor moves at v − ω·d in every turn. Its d is measured at
+    // the first answer and taken out of the estimate's speed before a second search.
+    match lateral_lever_from_speed((&rt, &rv, &rw), (&et, &ev), first.offset_s, gap) {
+        Some(lever) if lever.abs() >= MIN_SPEED_LEVER_M => {
+            let corrected: Vec<f64> = ev.iter().zip(&ew).map(|(v, w)| v + lever * w).collect();
+            search(
+                method,
+                (&rt, &rv),
+                (&et, &corrected),
+                params,
+                centering,
+                gap,
+            )
+            .or(Ok(first))
+        }
+        _ => Ok(first),
+    }
+}
+
+/// A lateral lever arm below this (metres) is left in the speed (it moves Δt by well under 5 ms).
+const MIN_SPEED_LEVER_M: f64 = 0.05;
+/// The largest lateral lever arm taken out of the speed, metres.
+const MAX_SPEED_LEVER_M: f64 = 3.0;
+
+/// Times, values and (speed only) heading rates of one trajectory's signal for `method`.
+type Signal = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// The signal `method` correlates, computed once per trajectory (the profile windows reuse it).
+pub fn method_signal(
+    method: OffsetMethod,
+    t: &[f64],
+    p: &[Vector3<f64>],
+    params: &OffsetParams,
+    what: &str,
+) -> Result<Signal> {
+    let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
+    let mut s: Signal = (Vec::new(), Vec::new(), Vec::new());
+    match method {
+        OffsetMethod::Curvature => {
+            for c in curvature_signature(t, p, &params.curvature) {
+                s.0.push(c.t);
+                s.1.push(c.curvature);
+            }
+        }
+        OffsetMethod::SignedCurvature | OffsetMethod::Auto => {
+            for c in curvature_signature(t, p, &params.curvature) {
+                s.0.push(c.t);
+                s.1.push(c.signed_curvature());
+            }
+        }
+        OffsetMethod::Speed => {
+            let noise = reference_noise(t, p).unwrap_or(0.0);
+            for v in speed_profile(t, p, params.speed_window_s, gap, noise) {
+                s.0.push(v.t);
+                s.1.push(v.speed);
+                s.2.push(v.yaw_rate);
+            }
+        }
+    }
+    if s.0.len() < 3 {
+        return Err(Error::TooFewSamples {
+            what: format!("{what} {} signal", method.as_str()),
+            n: s.0.len(),
+            need: 3,
+        });
+    }
+    if s.2.is_empty() {
+        s.2 = vec![0.0; s.0.len()];
+    }
+    Ok(s)
+}
+
+/// The lateral lever arm d (metres, estimate sensor to the left of the reference's positive) that
+/// best explains the estimate's speed at `offset_s` as a·(v_ref − ω_ref·d) + c, by least squares over
+/// the estimate's samples; `None` when the turns do not determine it or it is implausible.
+fn lateral_lever_from_speed(
+    (rt, rv, rw): (&[f64], &[f64], &[f64]),
+    (et, ev): (&[f64], &[f64]),
+    offset_s: f64,
+    gap: f64,
+) -> Option<f64> {
+    // Normal equations of ev = a·rv + b·rw + c.
+    let mut m = nalgebra::Matrix3::<f64>::zeros();
+    let mut y = nalgebra::Vector3::<f64>::zeros();
+    for (&te, &v) in et.iter().zip(ev) {
+        let t = te + offset_s;
+        let i = rt.partition_point(|&x| x < t);
+        if i == 0 || i >= rt.len() || rt[i] - rt[i - 1] > gap {
+            continue;
+        }
+        let f = (t - rt[i - 1]) / (rt[i] - rt[i - 1]);
+        let x = nalgebra::Vector3::new(
+            rv[i - 1] + f * (rv[i] - rv[i - 1]),
+            rw[i - 1] + f * (rw[i] - rw[i - 1]),
+            1.0,
+        );
+        m += x * x.transpose();
+        y += x * v;
+    }
+    let sol = m.try_inverse()? * y;
+    let (a, b) = (sol[0], sol[1]);
+    if a.abs() < 0.1 || !b.is_finite() {
+        return None;
+    }
+    let d = -b / a;
+    (d.abs() <= MAX_SPEED_LEVER_M).then_some(d * a)
+}
+
+/// The two-stage search (see the module doc) over two signals already computed.
+fn search(
+    method: OffsetMethod,
+    (rt, rv): (&[f64], &[f64]),
+    (et, ev): (&[f64], &[f64]),
+    params: &OffsetParams,
+    centering: Centering,
+    gap: f64,
+) -> Result<OffsetEstimate> {
     let no_overlap = || Error::NoOverlap {
         estimate: format!("estimate {} signal", method.as_str()),
         est_start: et[0],
@@ -246,7 +344,6 @@ pub fn estimate_time_offset_excluding(
         ref_end: rt[rt.len() - 1],
         offset: params.max_offset_s,
     };
-
     // Coarse stage: lag k pairs est grid point n with ref grid point n + k, i.e. Δt = k·h.
     let h = params.coarse_grid_s;
     let e = resample(&et, &ev, h, gap);
@@ -348,14 +445,19 @@ pub fn estimate_time_offset_excluding(
 
 /// The samples of `(t, v)` outside every interval of `exclude` (the grid does not interpolate across
 /// the hole when it is longer than the largest gap bridged).
-fn without((t, v): (Vec<f64>, Vec<f64>), exclude: &[(f64, f64)]) -> (Vec<f64>, Vec<f64>) {
+fn without((t, v, w): Signal, exclude: &[(f64, f64)]) -> Signal {
     if exclude.is_empty() {
-        return (t, v);
+        return (t, v, w);
     }
-    t.into_iter()
-        .zip(v)
-        .filter(|(ti, _)| !exclude.iter().any(|&(a, b)| *ti >= a && *ti <= b))
-        .unzip()
+    let mut out: Signal = (Vec::new(), Vec::new(), Vec::new());
+    for ((ti, vi), wi) in t.into_iter().zip(v).zip(w) {
+        if !exclude.iter().any(|&(a, b)| ti >= a && ti <= b) {
+            out.0.push(ti);
+            out.1.push(vi);
+            out.2.push(wi);
+        }
+    }
+    out
 }
 
 fn check_params(p: &OffsetParams) -> Result<()> {

@@ -1,0 +1,62 @@
+//! Issue 10 (clock offsets over time): the README fixture's bias, the offset profile and its σ, the
+//! model chosen from it (constant / linear / piecewise), on simulated missions with a known clock.
+
+use nalgebra::Vector3;
+use trajdrift::align::auto_offset::auto_time_offset;
+use trajdrift::align::time_offset::{estimate_time_offset, OffsetMethod, OffsetParams};
+use trajdrift::simulate::{default_route, simulate, Mission, MissionConfig};
+
+/// Times in seconds from the mission start (reference clock for the reference, the estimate's own
+/// clock for the estimate) and positions.
+#[allow(clippy::type_complexity)]
+fn series(m: &Mission) -> (Vec<f64>, Vec<Vector3<f64>>, Vec<f64>, Vec<Vector3<f64>>) {
+    let t0 = m.config.start_time_ns;
+    (
+        m.reference.times_s(t0),
+        m.reference.positions.clone(),
+        m.estimate.times_s(t0),
+        m.estimate.positions.clone(),
+    )
+}
+
+/// The README fixture (`fixtures/sim_ground`, the simulator's defaults): its estimate sensor sits
+/// 0.3 m to the left, so it moves at v − 0.3·ω in every turn; before the speed method took that out
+/// (`lateral_lever_from_speed`) every method read +0.176…+0.185 s against the true +0.2 s.
+#[test]
+fn readme_fixture_offset_is_within_5_ms() {
+    let m = simulate(&MissionConfig::default(), &default_route());
+    let (rt, rp, et, ep) = series(&m);
+    let a = auto_time_offset(&rt, &rp, &et, &ep, &OffsetParams::default()).unwrap();
+    let err = a.estimate.offset_s - 0.2;
+    println!(
+        "sim_ground: Δt {:+.4} s, error {:+.1} ms",
+        a.estimate.offset_s,
+        err * 1e3
+    );
+    assert!(err.abs() <= 0.005, "error {:.1} ms", err * 1e3);
+}
+
+/// The speed method is immune to a lateral lever arm on either side (before: −75 ms per metre).
+#[test]
+fn speed_offset_ignores_a_lateral_lever() {
+    for d in [-0.6, 0.3, 0.6] {
+        let c = MissionConfig {
+            est_lever_m: [0.0, d, 0.0],
+            ..MissionConfig::default()
+        };
+        let m = simulate(&c, &default_route());
+        let (rt, rp, et, ep) = series(&m);
+        let o = estimate_time_offset(
+            OffsetMethod::Speed,
+            &rt,
+            &rp,
+            &et,
+            &ep,
+            &OffsetParams::default(),
+        )
+        .unwrap();
+        let err = o.offset_s - 0.2;
+        println!("lateral lever {d:+.1} m: speed error {:+.1} ms", err * 1e3);
+        assert!(err.abs() <= 0.005, "lever {d}: error {:.1} ms", err * 1e3);
+    }
+}
