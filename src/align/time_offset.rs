@@ -346,8 +346,8 @@ fn search(
     };
     // Coarse stage: lag k pairs est grid point n with ref grid point n + k, i.e. Δt = k·h.
     let h = params.coarse_grid_s;
-    let e = resample(&et, &ev, h, gap);
-    let r = resample(&rt, &rv, h, gap);
+    let e = resample(et, ev, h, gap);
+    let r = resample(rt, rv, h, gap);
     let (e_def, r_def) = (e.defined_count(), r.defined_count());
     if e_def < 3 || r_def < 3 {
         return Err(no_overlap());
@@ -398,7 +398,7 @@ fn search(
     let hi = ((coarse_offset + FINE_WINDOW_COARSE_STEPS * h) / hf).round() as i64;
     let kf_max = (params.max_offset_s / hf).floor() as i64;
     let (lo, hi) = (lo.max(-kf_max), hi.min(kf_max));
-    let sums = fine_sums(&et, &ev, &rt, &rv, hf, gap, lo, hi);
+    let sums = fine_sums(et, ev, rt, rv, hf, gap, lo, hi);
     let fine: Vec<f64> = sums.iter().map(|s| s.ncc(centering)).collect();
     let fine_min_overlap = sums.iter().map(|s| s.n).fold(0.0, f64::max) * MIN_OVERLAP_SHARE;
     let Some(j) = (0..fine.len())
@@ -423,7 +423,7 @@ fn search(
         * (overlap_fraction / OVERLAP_FULL).clamp(0.0, 1.0)
         * (defined_fraction / DEFINED_FULL).clamp(0.0, 1.0))
     .clamp(0.0, 1.0);
-    let sigma_s = offset_sigma((&rt, &rv), (&et, &ev), offset, h, gap, centering);
+    let sigma_s = offset_sigma((rt, rv), (et, ev), offset, h, gap, centering);
     let status = if confidence >= MIN_CONFIDENCE && peak >= MIN_CORRELATION && !at_edge {
         OffsetStatus::Ok
     } else {
