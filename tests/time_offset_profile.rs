@@ -3,8 +3,10 @@
 
 use nalgebra::Vector3;
 use trajdrift::align::auto_offset::auto_time_offset;
+use trajdrift::align::clock_model::{clock_model, ClockModel};
+use trajdrift::align::offset_profile::{OffsetProfile, ProfileParams};
 use trajdrift::align::time_offset::{estimate_time_offset, OffsetMethod, OffsetParams};
-use trajdrift::simulate::{default_route, simulate, Mission, MissionConfig};
+use trajdrift::simulate::{default_route, simulate, ClockStep, Mission, MissionConfig};
 
 /// Times in seconds from the mission start (reference clock for the reference, the estimate's own
 /// clock for the estimate) and positions.
@@ -58,5 +60,85 @@ fn speed_offset_ignores_a_lateral_lever() {
         let err = o.offset_s - 0.2;
         println!("lateral lever {d:+.1} m: speed error {:+.1} ms", err * 1e3);
         assert!(err.abs() <= 0.005, "lever {d}: error {:.1} ms", err * 1e3);
+    }
+}
+
+/// The route repeated to last about `minutes`.
+fn laps(minutes: f64) -> Vec<trajdrift::simulate::motion::Segment> {
+    let one = default_route();
+    let lap: f64 = one.iter().map(|s| s.duration_s).sum();
+    let n = ((minutes * 60.0) / lap).round().max(1.0) as usize;
+    std::iter::repeat_n(one, n).flatten().collect()
+}
+
+/// Whole-mission offset, profile and model of a simulated mission.
+fn run(m: &Mission) -> (f64, OffsetProfile, ClockModel) {
+    let (rt, rp, et, ep) = series(m);
+    let params = OffsetParams::default();
+    let a = auto_time_offset(&rt, &rp, &et, &ep, &params).unwrap();
+    let (p, model) = clock_model(
+        &rt,
+        &rp,
+        &et,
+        &ep,
+        &params,
+        &a.estimate,
+        &ProfileParams::default(),
+        None,
+    )
+    .unwrap();
+    (a.estimate.offset_s, p, model)
+}
+
+#[test]
+#[ignore]
+fn explore() {
+    for (name, c, minutes) in [
+        ("constant", MissionConfig::default(), 10.0),
+        (
+            "drift+100",
+            MissionConfig {
+                clock_drift_ppm: 100.0,
+                ..MissionConfig::default()
+            },
+            20.0,
+        ),
+        (
+            "step",
+            MissionConfig {
+                time_offset_s: 0.9,
+                clock_step: Some(ClockStep {
+                    at_s: 300.0,
+                    offset_s: 0.3,
+                }),
+                ..MissionConfig::default()
+            },
+            10.0,
+        ),
+    ] {
+        let t = std::time::Instant::now();
+        let m = simulate(&c, &laps(minutes));
+        let (whole, p, model) = run(&m);
+        println!(
+            "{name}: whole {whole:+.4} profile {} windows of {:.0}s scale {:.1} -> {:?} {}  ({:.1}s)",
+            p.windows.len(),
+            p.window_s,
+            p.sigma_scale,
+            model.model,
+            model.reason,
+            t.elapsed().as_secs_f64()
+        );
+        for s in &model.segments {
+            println!(
+                "   seg {:.1}..{:.1} {:+.4} ± {:.4}",
+                s.t_start, s.t_end, s.offset_s, s.sigma_s
+            );
+        }
+        for w in &p.windows {
+            println!(
+                "   t {:7.1} {:+.4} ± {:.4} ρ {:.2} {}",
+                w.t, w.offset_s, w.sigma_s, w.correlation, w.usable
+            );
+        }
     }
 }

@@ -198,8 +198,10 @@ pub fn estimate_time_offset_excluding(
 ) -> Result<OffsetEstimate> {
     check_params(params)?;
     if method == OffsetMethod::Auto {
-        return crate::align::auto_offset::auto_time_offset(ref_t, ref_p, est_t, est_p, params)
-            .map(|a| a.estimate);
+        // `auto` is decided above the search (crate::align::auto_offset), never inside it.
+        return Err(Error::InvalidArgument(
+            "time offset: `auto` combines several searches; call auto_time_offset".into(),
+        ));
     }
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
     let (rt, rv, rw) = without(
@@ -210,12 +212,7 @@ pub fn estimate_time_offset_excluding(
         method_signal(method, est_t, est_p, params, "estimate")?,
         est_exclude,
     );
-    let centering = match method {
-        OffsetMethod::Speed if params.speed_mean_removed => Centering::MeanRemoved,
-        OffsetMethod::SignedCurvature | OffsetMethod::Auto => Centering::MeanRemoved,
-        _ => Centering::Raw,
-    };
-    let first = search(method, (&rt, &rv), (&et, &ev), params, centering, gap)?;
+    let first = search_signals(method, (&rt, &rv), (&et, &ev), params)?;
     if method != OffsetMethod::Speed {
         return Ok(first);
     }
@@ -224,18 +221,66 @@ pub fn estimate_time_offset_excluding(
     match lateral_lever_from_speed((&rt, &rv, &rw), (&et, &ev), first.offset_s, gap) {
         Some(lever) if lever.abs() >= MIN_SPEED_LEVER_M => {
             let corrected: Vec<f64> = ev.iter().zip(&ew).map(|(v, w)| v + lever * w).collect();
-            search(
-                method,
-                (&rt, &rv),
-                (&et, &corrected),
-                params,
-                centering,
-                gap,
-            )
-            .or(Ok(first))
+            search_signals(method, (&rt, &rv), (&et, &corrected), params).or(Ok(first))
         }
         _ => Ok(first),
     }
+}
+
+/// Both trajectories' signals for `method`, computed once, the estimate's speed freed of a lateral
+/// lever arm measured at `offset_s` (what [`estimate_time_offset`] found): the offset profile
+/// correlates windows of these.
+pub fn prepared_signals(
+    method: OffsetMethod,
+    ref_t: &[f64],
+    ref_p: &[Vector3<f64>],
+    est_t: &[f64],
+    est_p: &[Vector3<f64>],
+    params: &OffsetParams,
+    offset_s: f64,
+) -> Result<(Signal, Signal)> {
+    check_params(params)?;
+    let r = method_signal(method, ref_t, ref_p, params, "reference")?;
+    let mut e = method_signal(method, est_t, est_p, params, "estimate")?;
+    if method == OffsetMethod::Speed {
+        let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
+        if let Some(lever) =
+            lateral_lever_from_speed((&r.0, &r.1, &r.2), (&e.0, &e.1), offset_s, gap)
+                .filter(|l| l.abs() >= MIN_SPEED_LEVER_M)
+        {
+            for (v, w) in e.1.iter_mut().zip(&e.2) {
+                *v += lever * w;
+            }
+        }
+    }
+    Ok((r, e))
+}
+
+/// The search of one method over two signals already computed (times, values), `est` on the
+/// estimate's clock.
+pub fn search_signals(
+    method: OffsetMethod,
+    reference: (&[f64], &[f64]),
+    estimate: (&[f64], &[f64]),
+    params: &OffsetParams,
+) -> Result<OffsetEstimate> {
+    check_params(params)?;
+    for (s, what) in [(reference, "reference"), (estimate, "estimate")] {
+        if s.0.len() < 3 {
+            return Err(Error::TooFewSamples {
+                what: format!("{what} {} signal", method.as_str()),
+                n: s.0.len(),
+                need: 3,
+            });
+        }
+    }
+    let centering = match method {
+        OffsetMethod::Speed if params.speed_mean_removed => Centering::MeanRemoved,
+        OffsetMethod::SignedCurvature | OffsetMethod::Auto => Centering::MeanRemoved,
+        _ => Centering::Raw,
+    };
+    let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
+    search(method, reference, estimate, params, centering, gap)
 }
 
 /// A lateral lever arm below this (metres) is left in the speed (it moves Δt by well under 5 ms).
@@ -244,7 +289,7 @@ const MIN_SPEED_LEVER_M: f64 = 0.05;
 const MAX_SPEED_LEVER_M: f64 = 3.0;
 
 /// Times, values and (speed only) heading rates of one trajectory's signal for `method`.
-type Signal = (Vec<f64>, Vec<f64>, Vec<f64>);
+pub type Signal = (Vec<f64>, Vec<f64>, Vec<f64>);
 
 /// The signal `method` correlates, computed once per trajectory (the profile windows reuse it).
 pub fn method_signal(
