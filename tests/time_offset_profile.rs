@@ -1,11 +1,16 @@
 //! Issue 10 (clock offsets over time): the README fixture's bias, the offset profile and its σ, the
 //! model chosen from it (constant / linear / piecewise), on simulated missions with a known clock.
 
+mod common;
+
 use nalgebra::Vector3;
 use trajdrift::align::auto_offset::auto_time_offset;
 use trajdrift::align::clock_model::{clock_model, ClockModel};
 use trajdrift::align::offset_profile::{OffsetProfile, ProfileParams};
 use trajdrift::align::time_offset::{estimate_time_offset, OffsetMethod, OffsetParams};
+use trajdrift::eval::config::{EvalConfig, NamedInput};
+use trajdrift::eval::evaluate;
+use trajdrift::report::json::Report;
 use trajdrift::simulate::{default_route, simulate, ClockStep, Mission, MissionConfig};
 
 /// Times in seconds from the mission start (reference clock for the reference, the estimate's own
@@ -140,5 +145,58 @@ fn explore() {
                 w.t, w.offset_s, w.sigma_s, w.correlation, w.usable
             );
         }
+    }
+}
+
+/// `trajdrift eval RECORDING --reference REF --estimate EST`, all defaults but `edit`.
+fn eval_mcap(path: &std::path::Path, reference: &str, estimate: &str) -> Report {
+    let c = EvalConfig::new(
+        Some(path.to_path_buf()),
+        NamedInput::topic(reference),
+        vec![NamedInput::topic(estimate)],
+    );
+    evaluate(&c, &|_| {}).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn print_report(name: &str, rep: &Report) {
+    for e in &rep.estimates {
+        let o = &e.time_offset;
+        println!(
+            "{name} {}: Δt {:+.4} ± {} s, model {:?}: {}",
+            e.name,
+            o.offset_s,
+            o.sigma_s.map_or("-".into(), |s| format!("{s:.4}")),
+            o.model,
+            o.model_reason.clone().unwrap_or_default()
+        );
+        for w in &o.profile {
+            println!(
+                "   t {:9.1} {:+.4} ± {:.4} ρ {:.2}",
+                w.t - rep.estimates[0].time_offset.profile[0].t,
+                w.offset_s,
+                w.sigma_s,
+                w.correlation
+            );
+        }
+    }
+}
+
+#[test]
+#[ignore]
+fn shared_table() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    for m in common::MISSIONS
+        .iter()
+        .chain(&["clock_step", "clock_drift"])
+    {
+        let rep = eval_mcap(
+            &common::mission(&shared, m).join("mission.mcap"),
+            "/reference/position",
+            "/estimate/odom",
+        );
+        println!("truth {}", common::truth(&shared, m)["time_offset"]);
+        print_report(m, &rep);
     }
 }

@@ -2,7 +2,6 @@
 
 pub mod auto_offset;
 pub mod auto_params;
-pub mod clock_drift;
 pub mod clock_model;
 pub mod curvature;
 pub mod grid;

@@ -12,7 +12,8 @@
 //!
 //! **σ per window.** The residual σ of [`crate::align::offset_sigma`] sees the residual's size but
 //! not the noise that moved the peak, nor a shape difference between two sensors' signals: on real
-//! data it is ~100× too small. It is kept only as the windows' *relative* weight; its scale comes
+//! data it is ~100× too small. It is kept only as the windows' *relative* weight, and only upwards
+//! (a window's σ is at least the median window's: a small residual is no proof); its scale comes
 //! from the data: the second differences Δ_{i−2} − 2Δ_i + Δ_{i+2} of non-overlapping windows are
 //! free of any constant and of any linear drift, and under honest σ_i each divided by
 //! √(σ²_{i−2} + 4σ²_i + σ²_{i+2}) is a unit normal. The scale f² is the median of their squares
@@ -184,7 +185,13 @@ pub fn profile_of_signals(
             f.map(|(o, s, c, usable)| ProfileWindow {
                 t,
                 offset_s: o,
-                sigma_s: if s.is_finite() && s > 0.0 { s } else { typical },
+                // The residual σ may raise a window above the typical one, never lower it: a
+                // window whose residual looks small is not thereby more trustworthy than its peers.
+                sigma_s: if s.is_finite() {
+                    s.max(typical)
+                } else {
+                    typical
+                },
                 correlation: c,
                 usable,
             })

@@ -215,6 +215,28 @@ pub struct EvalArgs {
     /// preset's parameters.
     #[arg(skip)]
     pub given: Vec<String>,
+    /// Clock model of the time offset: one constant, a linear drift, steps, or auto (chosen from the
+    /// offset profile; constant unless the data refute it).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub offset_model: OffsetModelArg,
+    /// Window of the offset profile, seconds [default: a tenth of the overlap, in 20–120 s].
+    #[arg(long, value_name = "S")]
+    pub offset_window: Option<f64>,
+    /// Step of the offset profile, seconds [default: half the window].
+    #[arg(long, value_name = "S")]
+    pub offset_step: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum OffsetModelArg {
+    /// one offset for the whole mission
+    Constant,
+    /// a clock drift: Δt linear in time
+    Linear,
+    /// steps: a constant offset per segment
+    Piecewise,
+    /// chosen from the offset profile (BIC; constant unless refuted)
+    Auto,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]

@@ -216,6 +216,10 @@ pub struct EvalConfig {
     /// `--estimate-lever [NAME=]X,Y,Z|tf-static:[BODY:]FRAME`: estimate sensors relative to the common
     /// body point; `None` as name applies to every estimate without a named one.
     pub estimate_levers: Vec<(Option<String>, LeverSpec)>,
+    /// `--offset-model`: the clock model fitted to the offset profile; `None`: chosen from it.
+    pub offset_model: Option<crate::align::clock_model::OffsetModel>,
+    /// `--offset-window`/`--offset-step` of the offset profile (`None`: from the data).
+    pub offset_profile: crate::align::offset_profile::ProfileParams,
 }
 
 impl EvalConfig {
@@ -252,6 +256,8 @@ impl EvalConfig {
             text: TextOptions::default(),
             reference_lever: None,
             estimate_levers: Vec::new(),
+            offset_model: None,
+            offset_profile: Default::default(),
         }
     }
 
@@ -396,6 +402,12 @@ impl EvalConfig {
             positive("--dt-max", v)?;
         }
         positive("--max-offset", self.max_offset_s)?;
+        if let Some(w) = self.offset_profile.window_s {
+            positive("--offset-window", w)?;
+        }
+        if let Some(w) = self.offset_profile.step_s {
+            positive("--offset-step", w)?;
+        }
         positive("--grid", self.grid_s)?;
         if self.lever_arm_m.is_nan() || self.lever_arm_m < 0.0 {
             return bad(format!("--lever-arm must be ≥ 0, got {}", self.lever_arm_m));

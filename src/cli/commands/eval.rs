@@ -2,6 +2,8 @@
 
 use anyhow::{anyhow, Result};
 
+use trajdrift::align::clock_model::OffsetModel;
+use trajdrift::align::offset_profile::ProfileParams;
 use trajdrift::align::time_offset::OffsetMethod;
 use trajdrift::annotate::annotate;
 use trajdrift::eval::config::{EvalConfig, LeverSpec, NamedInput, Platform};
@@ -12,8 +14,8 @@ use trajdrift::report::{output::write_output, table};
 use trajdrift::sources::StampSource;
 
 use crate::cli::args::{
-    parse_triple, text_options, EvalArgs, LeverCorrectionArg, OffsetMethodArg, PlatformArg,
-    StampArg,
+    parse_triple, text_options, EvalArgs, LeverCorrectionArg, OffsetMethodArg, OffsetModelArg,
+    PlatformArg, StampArg,
 };
 use crate::cli::progress::ReadProgress;
 use crate::cli::{EXIT_OK, EXIT_WARNING};
@@ -87,6 +89,16 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
         OffsetMethodArg::Speed => OffsetMethod::Speed,
         OffsetMethodArg::SignedCurvature => OffsetMethod::SignedCurvature,
         OffsetMethodArg::Auto => OffsetMethod::Auto,
+    };
+    c.offset_model = match a.offset_model {
+        OffsetModelArg::Constant => Some(OffsetModel::Constant),
+        OffsetModelArg::Linear => Some(OffsetModel::Linear),
+        OffsetModelArg::Piecewise => Some(OffsetModel::Piecewise),
+        OffsetModelArg::Auto => None,
+    };
+    c.offset_profile = ProfileParams {
+        window_s: a.offset_window,
+        step_s: a.offset_step,
     };
     c.max_offset_s = a.max_offset;
     c.grid_s = a.grid;
