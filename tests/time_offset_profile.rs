@@ -5,12 +5,13 @@ mod common;
 
 use nalgebra::Vector3;
 use trajdrift::align::auto_offset::auto_time_offset;
-use trajdrift::align::clock_model::{clock_model, ClockModel};
+use trajdrift::align::clock_model::{clock_model, ClockModel, OffsetModel};
 use trajdrift::align::offset_profile::{OffsetProfile, ProfileParams};
 use trajdrift::align::time_offset::{estimate_time_offset, OffsetMethod, OffsetParams};
 use trajdrift::eval::config::{EvalConfig, NamedInput};
 use trajdrift::eval::evaluate;
 use trajdrift::report::json::Report;
+use trajdrift::simulate::motion::Segment;
 use trajdrift::simulate::{default_route, simulate, ClockStep, Mission, MissionConfig};
 
 /// Times in seconds from the mission start (reference clock for the reference, the estimate's own
@@ -199,4 +200,206 @@ fn shared_table() {
         println!("truth {}", common::truth(&shared, m)["time_offset"]);
         print_report(m, &rep);
     }
+}
+
+/// A legged robot's lap: slow walking, tight turns, stops; about 150 s.
+fn legged_lap() -> Vec<Segment> {
+    let s = |d: f64, v: f64, k: f64| Segment {
+        duration_s: d,
+        speed_mps: v,
+        curvature: k,
+    };
+    vec![
+        s(3.0, 0.0, 0.0),
+        s(15.0, 0.5, 0.0),
+        s(12.0, 0.4, 0.8),
+        s(10.0, 0.6, 0.0),
+        s(14.0, 0.35, -1.0),
+        s(4.0, 0.0, 0.0),
+        s(12.0, 0.5, 0.4),
+        s(16.0, 0.45, -0.5),
+        s(10.0, 0.6, 0.0),
+        s(18.0, 0.3, 1.2),
+        s(12.0, 0.5, -0.2),
+        s(20.0, 0.4, 0.6),
+        s(4.0, 0.0, 0.0),
+    ]
+}
+
+/// `lap` repeated to last about `minutes`.
+fn repeat(lap: Vec<Segment>, minutes: f64) -> Vec<Segment> {
+    let one: f64 = lap.iter().map(|s| s.duration_s).sum();
+    let n = ((minutes * 60.0) / one).round().max(1.0) as usize;
+    std::iter::repeat_n(lap, n).flatten().collect()
+}
+
+/// Acceptance: a 20-minute wheeled mission with a +100 ppm clock is `linear`, within 10 ppm.
+#[test]
+fn a_100_ppm_clock_is_linear_within_10_ppm() {
+    let c = MissionConfig {
+        clock_drift_ppm: 100.0,
+        ..MissionConfig::default()
+    };
+    let (_, _, model) = run(&simulate(&c, &laps(20.0)));
+    let ppm = model.drift_ppm.unwrap();
+    println!(
+        "+100 ppm, 20 min: {:?}, {ppm:+.1} ppm ({})",
+        model.model, model.reason
+    );
+    assert_eq!(model.model, OffsetModel::Linear, "{}", model.reason);
+    assert!((ppm - 100.0).abs() <= 10.0, "{ppm} ppm");
+}
+
+/// Acceptance: a 15-minute legged mission (0.2 m forward lever, slow, tight turns) at −150 ppm is
+/// measured within 15 ppm.
+#[test]
+fn a_legged_minus_150_ppm_clock_is_within_15_ppm() {
+    let c = MissionConfig {
+        clock_drift_ppm: -150.0,
+        est_lever_m: [0.2, 0.0, 0.0],
+        time_offset_s: 0.07,
+        seed: 11,
+        ..MissionConfig::default()
+    };
+    let (_, _, model) = run(&simulate(&c, &repeat(legged_lap(), 15.0)));
+    let ppm = model.drift_ppm.unwrap();
+    println!(
+        "legged −150 ppm, 15 min: {:?}, {ppm:+.1} ppm ({})",
+        model.model, model.reason
+    );
+    assert_eq!(model.model, OffsetModel::Linear, "{}", model.reason);
+    assert!((ppm + 150.0).abs() <= 15.0, "{ppm} ppm");
+}
+
+/// Acceptance: a 10-minute mission whose offset steps from 0.9 s to 0.3 s at 300 s is `piecewise`,
+/// the change within 15 s of 300 s, each segment within 20 ms.
+#[test]
+fn a_clock_step_is_piecewise() {
+    let c = MissionConfig {
+        time_offset_s: 0.9,
+        clock_step: Some(ClockStep {
+            at_s: 300.0,
+            offset_s: 0.3,
+        }),
+        ..MissionConfig::default()
+    };
+    let (_, _, model) = run(&simulate(&c, &laps(10.0)));
+    println!(
+        "step 0.9 → 0.3 s at 300 s: {:?} {:?}",
+        model.model, model.segments
+    );
+    assert_eq!(model.model, OffsetModel::Piecewise, "{}", model.reason);
+    assert_eq!(model.segments.len(), 2, "{:?}", model.segments);
+    let (a, b) = (model.segments[0], model.segments[1]);
+    assert!((b.t_start - 300.0).abs() <= 15.0, "change at {}", b.t_start);
+    assert!((a.offset_s - 0.9).abs() <= 0.02, "{a:?}");
+    assert!((b.offset_s - 0.3).abs() <= 0.02, "{b:?}");
+}
+
+/// A position jump of the estimate (a localiser correcting itself by 2 m, twice) is not a clock step.
+#[test]
+fn position_jumps_are_not_clock_steps() {
+    let mut m = simulate(&MissionConfig::default(), &laps(10.0));
+    let t0 = m.config.start_time_ns;
+    for (i, s) in m.estimate.stamps_ns.clone().iter().enumerate() {
+        let t = (s - t0) as f64 * 1e-9;
+        if t > 200.0 {
+            m.estimate.positions[i].x += 2.0;
+        }
+        if t > 400.0 {
+            m.estimate.positions[i].y -= 2.0;
+        }
+    }
+    let (_, _, model) = run(&m);
+    println!("position jumps: {:?} ({})", model.model, model.reason);
+    assert_eq!(model.model, OffsetModel::Constant, "{}", model.reason);
+}
+
+/// The simulated constant-offset missions of the coverage table: seeds, offsets, lever arms, noise,
+/// routes and lengths varied.
+fn coverage_missions() -> Vec<(String, MissionConfig, Vec<Segment>)> {
+    let offsets = [0.2, -0.35, 0.07, 1.3, -2.1];
+    let levers = [
+        [0.0, 0.3, 0.0],
+        [0.0, 0.0, 0.0],
+        [0.3, 0.0, 0.0],
+        [0.0, -0.3, 0.0],
+    ];
+    (0..24u64)
+        .map(|k| {
+            let legged = k % 4 == 3;
+            let c = MissionConfig {
+                seed: 100 + k,
+                time_offset_s: offsets[k as usize % offsets.len()],
+                est_lever_m: levers[k as usize % levers.len()],
+                ref_noise_m: [0.02, 0.01, 0.03][k as usize % 3],
+                scale_error: [0.02, -0.01, 0.0][k as usize % 3],
+                ..MissionConfig::default()
+            };
+            let minutes = [4.0, 6.0, 8.0][k as usize % 3];
+            let (name, route) = if legged {
+                ("legged", repeat(legged_lap(), minutes))
+            } else {
+                ("wheeled", laps(minutes))
+            };
+            (format!("{name} {minutes:.0} min seed {}", c.seed), c, route)
+        })
+        .collect()
+}
+
+/// Acceptance (honest σ): over 24 simulated constant-offset missions, |Δt − truth| ≤ 2σ in ≥ 85 % of
+/// them with a median σ ≤ 10 ms, and the same coverage for the profile's usable windows. Prints the
+/// table: `cargo test --release --test time_offset_profile -- --nocapture coverage_table`.
+#[test]
+fn coverage_table() {
+    let mut covered = 0;
+    let mut sigmas = Vec::new();
+    let (mut w_in, mut w_all) = (0usize, 0usize);
+    let missions = coverage_missions();
+    println!(
+        "| mission | Δt true | Δt | error ms | σ ms | within 2σ | model | windows within 2σ |"
+    );
+    for (name, c, route) in &missions {
+        let m = simulate(c, route);
+        let (whole, p, model) = run(&m);
+        let truth = c.time_offset_s;
+        let err = whole - truth;
+        let ok = err.abs() <= 2.0 * model.sigma_s;
+        covered += usize::from(ok);
+        sigmas.push(model.sigma_s);
+        let u = p.usable();
+        let inside = u
+            .iter()
+            .filter(|w| (w.offset_s - truth).abs() <= 2.0 * w.sigma_s)
+            .count();
+        w_in += inside;
+        w_all += u.len();
+        println!(
+            "| {name} | {truth:+.3} | {whole:+.4} | {:+.1} | {:.1} | {ok} | {} | {inside}/{} |",
+            err * 1e3,
+            model.sigma_s * 1e3,
+            model.model.as_str(),
+            u.len()
+        );
+        assert_eq!(
+            model.model,
+            OffsetModel::Constant,
+            "{name}: {}",
+            model.reason
+        );
+    }
+    sigmas.sort_by(f64::total_cmp);
+    let median = sigmas[sigmas.len() / 2];
+    let share = covered as f64 / missions.len() as f64;
+    let w_share = w_in as f64 / w_all as f64;
+    println!(
+        "Δt within 2σ: {covered}/{} = {:.0} %, median σ {:.1} ms; profile windows within 2σ: {w_in}/{w_all} = {:.0} %",
+        missions.len(),
+        share * 100.0,
+        median * 1e3,
+        w_share * 100.0
+    );
+    assert!(share >= 0.85, "coverage {share}");
+    assert!(median <= 0.010, "median σ {median}");
+    assert!(w_share >= 0.85, "window coverage {w_share}");
 }
