@@ -403,3 +403,150 @@ fn coverage_table() {
     assert!(median <= 0.010, "median σ {median}");
     assert!(w_share >= 0.85, "window coverage {w_share}");
 }
+
+/// Acceptance: the five shared constant-offset missions are `constant` with no drift or step
+/// warning; `clock_step` is `piecewise` (change within 15 s of its truth, segments within 20 ms) and
+/// `clock_drift` `linear` (its 80 ppm within 15 ppm), each with its warning.
+#[test]
+fn shared_missions_get_their_clock_model() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let eval = |m: &str| {
+        eval_mcap(
+            &common::mission(&shared, m).join("mission.mcap"),
+            "/reference/position",
+            "/estimate/odom",
+        )
+    };
+    for m in common::MISSIONS {
+        let rep = eval(m);
+        let o = &rep.estimates[0].time_offset;
+        println!("{m}: {:?} {:?}", o.model, o.model_reason);
+        assert_eq!(
+            o.model,
+            Some(OffsetModel::Constant),
+            "{m}: {:?}",
+            o.model_reason
+        );
+        assert!(!has_clock_warning(&rep), "{m}: {:?}", rep.warnings);
+    }
+    let rep = eval("clock_step");
+    let truth = common::truth(&shared, "clock_step");
+    let o = &rep.estimates[0].time_offset;
+    println!("clock_step: {:?} {:?}", o.model_reason, o.segments);
+    assert_eq!(
+        o.model,
+        Some(OffsetModel::Piecewise),
+        "{:?}",
+        o.model_reason
+    );
+    assert!(rep
+        .warnings
+        .iter()
+        .any(|w| w.code == "clock_step_suspected"));
+    let t0 = o.profile[0].t - 0.5 * o.profile_window_s.unwrap();
+    let at = truth["time_offset"]["clock_step_t_s"].as_f64().unwrap();
+    assert_eq!(o.segments.len(), 2, "{:?}", o.segments);
+    assert!(
+        (o.segments[1].t_start - t0 - at).abs() <= 15.0,
+        "{:?}",
+        o.segments
+    );
+    let before = truth["time_offset"]["dt_true_s"].as_f64().unwrap();
+    let after = truth["time_offset"]["dt_after_step_s"].as_f64().unwrap();
+    assert!(
+        (o.segments[0].offset_s - before).abs() <= 0.02,
+        "{:?}",
+        o.segments
+    );
+    assert!(
+        (o.segments[1].offset_s - after).abs() <= 0.02,
+        "{:?}",
+        o.segments
+    );
+
+    let rep = eval("clock_drift");
+    let o = &rep.estimates[0].time_offset;
+    println!("clock_drift: {:?}", o.model_reason);
+    assert_eq!(o.model, Some(OffsetModel::Linear), "{:?}", o.model_reason);
+    assert!(
+        (o.drift_ppm.unwrap() - 80.0).abs() <= 15.0,
+        "{:?}",
+        o.drift_ppm
+    );
+    assert!(rep
+        .warnings
+        .iter()
+        .any(|w| w.code == "clock_drift_suspected"));
+}
+
+fn has_clock_warning(rep: &Report) -> bool {
+    rep.warnings
+        .iter()
+        .any(|w| w.code == "clock_drift_suspected" || w.code == "clock_step_suspected")
+}
+
+/// Acceptance: the real recordings of `shared/evo-data` (EuRoC V102, TUM fr1_xyz and fr2_desk, KITTI
+/// 00 ORB and S-PTAM with times, the ROS 1 example bag's two estimates, nav2 `/amcl_pose` and
+/// `/tf:map:base_footprint` against `/odom`) keep one constant offset, with no drift or step warning.
+#[test]
+fn real_recordings_are_constant() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let evo = shared.join("evo-data");
+    let files = |r: &str, e: &str| {
+        let mut c = EvalConfig::new(
+            None,
+            NamedInput::file(&evo.join(r).display().to_string()),
+            vec![NamedInput::file(&evo.join(e).display().to_string())],
+        );
+        c.text.kitti_times = Some(evo.join("KITTI_00_gt_times.txt"));
+        (format!("{r} / {e}"), c)
+    };
+    let topics = |file: &str, r: &str, e: &[&str]| {
+        (
+            format!("{file} {r} / {e:?}"),
+            EvalConfig::new(
+                Some(evo.join(file)),
+                NamedInput::topic(r),
+                e.iter().map(|e| NamedInput::topic(e)).collect(),
+            ),
+        )
+    };
+    let cases = [
+        files("V102_groundtruth.csv", "V102.txt"),
+        files(
+            "freiburg1_xyz-groundtruth.txt",
+            "freiburg1_xyz-rgbdslam.txt",
+        ),
+        files("fr2_desk_groundtruth.txt", "fr2_desk_ORB.txt"),
+        files("KITTI_00_gt.txt", "KITTI_00_ORB.txt"),
+        files("KITTI_00_gt.txt", "KITTI_00_SPTAM.txt"),
+        topics("ROS_example.bag", "groundtruth", &["ORB-SLAM", "S-PTAM"]),
+        topics("nav2_turtlebot.mcap", "/amcl_pose", &["/odom"]),
+        topics("nav2_turtlebot.mcap", "/tf:map:base_footprint", &["/odom"]),
+    ];
+    for (name, c) in cases {
+        let rep = evaluate(&c, &|_| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
+        for e in &rep.estimates {
+            let o = &e.time_offset;
+            println!(
+                "{name} {}: Δt {:+.4} ± {} s, status {}, model {:?}: {}",
+                e.name,
+                o.offset_s,
+                o.sigma_s.map_or("-".into(), |s| format!("{s:.4}")),
+                o.status,
+                o.model,
+                o.model_reason.clone().unwrap_or_default()
+            );
+            assert!(
+                o.model.is_none() || o.model == Some(OffsetModel::Constant),
+                "{name}: {:?}",
+                o.model_reason
+            );
+        }
+        assert!(!has_clock_warning(&rep), "{name}: {:?}", rep.warnings);
+    }
+}
