@@ -550,3 +550,70 @@ fn real_recordings_are_constant() {
         assert!(!has_clock_warning(&rep), "{name}: {:?}", rep.warnings);
     }
 }
+
+/// The offset stage on the two-hour bench mission (60 laps): the whole-mission search, then what came
+/// after it before issue 10 (the clock drift's 2 thirds × (1 + 16 noise-injected) searches over ±2 s,
+/// replayed here with the same parameters) against the profile and model that replace it. Both run
+/// in this process, under the same load. Run with
+/// `cargo test --release --test time_offset_profile -- --ignored --nocapture offset_stage_timing`.
+#[test]
+#[ignore]
+fn offset_stage_timing() {
+    use std::time::Instant;
+    let m = simulate(&MissionConfig::default(), &laps(121.0));
+    let (rt, rp, et, ep) = series(&m);
+    let params = OffsetParams::default();
+    let start = Instant::now();
+    let a = auto_time_offset(&rt, &rp, &et, &ep, &params).unwrap();
+    let search = start.elapsed().as_secs_f64();
+    // Before: each third searched once and 16 more times with noise (grid 5 ms), ±2 s.
+    let start = Instant::now();
+    let third = (rt[rt.len() - 1] - rt[0]) / 3.0;
+    let p = OffsetParams {
+        max_offset_s: 2.0,
+        ..params
+    };
+    let coarse = OffsetParams { grid_s: 0.005, ..p };
+    for (lo, hi) in [
+        (rt[0], rt[0] + third),
+        (rt[rt.len() - 1] - third, rt[rt.len() - 1]),
+    ] {
+        let ri = rt.partition_point(|&t| t < lo)..rt.partition_point(|&t| t <= hi);
+        let shifted: Vec<f64> = et.iter().map(|t| t + a.estimate.offset_s).collect();
+        let ei =
+            shifted.partition_point(|&t| t < lo - 6.0)..shifted.partition_point(|&t| t <= hi + 6.0);
+        for k in 0..17 {
+            let q = if k == 0 { &p } else { &coarse };
+            let _ = estimate_time_offset(
+                a.estimate.method,
+                &rt[ri.clone()],
+                &rp[ri.clone()],
+                &shifted[ei.clone()],
+                &ep[ei.clone()],
+                q,
+            );
+        }
+    }
+    let thirds = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    let (p, model) = clock_model(
+        &rt,
+        &rp,
+        &et,
+        &ep,
+        &params,
+        &a.estimate,
+        &ProfileParams::default(),
+        None,
+    )
+    .unwrap();
+    let profile = start.elapsed().as_secs_f64();
+    println!(
+        "2-hour mission ({:.0} s): whole-mission search {search:.2} s; before: + thirds with noise injection {thirds:.2} s = {:.2} s; now: + profile of {} windows and model {profile:.2} s = {:.2} s ({:?})",
+        m.duration_s,
+        search + thirds,
+        p.windows.len(),
+        search + profile,
+        model.model
+    );
+}

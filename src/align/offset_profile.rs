@@ -144,57 +144,30 @@ pub fn profile_of_signals(
         ((b - a - window_s) / step_s).floor() as usize + 1
     };
     let window_s = window_s.min(b - a);
-    let mut raw: Vec<(f64, Option<(f64, f64, f64, bool)>)> = Vec::with_capacity(n);
-    for k in 0..n {
-        let lo = a + k as f64 * step_s;
-        let hi = lo + window_s;
-        let margin = SEARCH_S + params.speed_window_s;
-        let ri = range(&r.0, lo, hi);
-        let ei = range(&shifted, lo - margin, hi + margin);
-        let found = search_signals(
-            method,
-            (&r.0[ri.clone()], &r.1[ri]),
-            (&shifted[ei.clone()], &e.1[ei]),
-            &p,
-        )
-        .ok()
-        .map(|o| {
-            // The short search range leaves no rival outside the main lobe, so the status (which
-            // asks for one) says nothing here: a clear NCC off the search's edge is what counts.
-            let usable = o.correlation >= MIN_WINDOW_CORRELATION
-                && o.offset_s.abs() < p.max_offset_s - EDGE_S
-                && o.overlap_fraction >= 0.5;
-            (
-                offset_s + o.offset_s,
-                o.sigma_s.unwrap_or(f64::NAN),
-                o.correlation,
-                usable,
-            )
-        });
-        raw.push((lo + 0.5 * window_s, found));
-    }
+    // Each window's answer, σ still the residual's (NaN when it has none).
+    let raw: Vec<ProfileWindow> = (0..n)
+        .filter_map(|k| {
+            let lo = a + k as f64 * step_s;
+            one_window(method, (r, e), &shifted, &p, (lo, lo + window_s), offset_s)
+        })
+        .collect();
     let residual: Vec<f64> = raw
         .iter()
-        .filter_map(|(_, f)| f.map(|f| f.1))
+        .map(|w| w.sigma_s)
         .filter(|s| s.is_finite() && *s > 0.0)
         .collect();
     let typical = median(&residual).unwrap_or(SIGMA_FLOOR_S);
+    // The residual σ may raise a window above the typical one, never lower it: a window whose
+    // residual looks small is not thereby more trustworthy than its peers.
     let windows: Vec<ProfileWindow> = raw
-        .iter()
-        .filter_map(|&(t, f)| {
-            f.map(|(o, s, c, usable)| ProfileWindow {
-                t,
-                offset_s: o,
-                // The residual σ may raise a window above the typical one, never lower it: a
-                // window whose residual looks small is not thereby more trustworthy than its peers.
-                sigma_s: if s.is_finite() {
-                    s.max(typical)
-                } else {
-                    typical
-                },
-                correlation: c,
-                usable,
-            })
+        .into_iter()
+        .map(|w| ProfileWindow {
+            sigma_s: if w.sigma_s.is_finite() {
+                w.sigma_s.max(typical)
+            } else {
+                typical
+            },
+            ..w
         })
         .collect();
     let stride = ((window_s / step_s).ceil() as usize).max(1);
@@ -213,6 +186,40 @@ pub fn profile_of_signals(
         sigma_scale,
         windows,
     }
+}
+
+/// The search on the window [lo, hi] of the reference clock: the reference's signal cut to it, the
+/// estimate's (`shifted` by Δt₀) reaching past it by the search range and the speed window.
+fn one_window(
+    method: OffsetMethod,
+    (r, e): (&Signal, &Signal),
+    shifted: &[f64],
+    p: &OffsetParams,
+    (lo, hi): (f64, f64),
+    offset_s: f64,
+) -> Option<ProfileWindow> {
+    let margin = SEARCH_S + p.speed_window_s;
+    let ri = range(&r.0, lo, hi);
+    let ei = range(shifted, lo - margin, hi + margin);
+    let o = search_signals(
+        method,
+        (&r.0[ri.clone()], &r.1[ri]),
+        (&shifted[ei.clone()], &e.1[ei]),
+        p,
+    )
+    .ok()?;
+    // The short search range leaves no rival outside the main lobe, so the status (which asks for
+    // one) says nothing here: a clear NCC off the search's edge is what counts.
+    let usable = o.correlation >= MIN_WINDOW_CORRELATION
+        && o.offset_s.abs() < p.max_offset_s - EDGE_S
+        && o.overlap_fraction >= 0.5;
+    Some(ProfileWindow {
+        t: 0.5 * (lo + hi),
+        offset_s: offset_s + o.offset_s,
+        sigma_s: o.sigma_s.unwrap_or(f64::NAN),
+        correlation: o.correlation,
+        usable,
+    })
 }
 
 /// f of the module doc: from the second differences of usable windows `stride` apart (the nearest

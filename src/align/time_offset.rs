@@ -220,8 +220,25 @@ pub fn estimate_time_offset_excluding(
     // the first answer and taken out of the estimate's speed before a second search.
     match lateral_lever_from_speed((&rt, &rv, &rw), (&et, &ev), first.offset_s, gap) {
         Some(lever) if lever.abs() >= MIN_SPEED_LEVER_M => {
+            // The lever moves Δt by tens of ms: the second search only looks ±REFINE_S around the
+            // first answer (cheap), and keeps the first answer's confidence over the whole range.
             let corrected: Vec<f64> = ev.iter().zip(&ew).map(|(v, w)| v + lever * w).collect();
-            search_signals(method, (&rt, &rv), (&et, &corrected), params).or(Ok(first))
+            let shifted: Vec<f64> = et.iter().map(|t| t + first.offset_s).collect();
+            let near = OffsetParams {
+                max_offset_s: REFINE_S.min(params.max_offset_s),
+                ..*params
+            };
+            match search_signals(method, (&rt, &rv), (&shifted, &corrected), &near) {
+                Ok(o) if o.offset_s.abs() < near.max_offset_s - near.coarse_grid_s => {
+                    Ok(OffsetEstimate {
+                        offset_s: first.offset_s + o.offset_s,
+                        correlation: o.correlation,
+                        sigma_s: o.sigma_s,
+                        ..first
+                    })
+                }
+                _ => Ok(first),
+            }
         }
         _ => Ok(first),
     }
@@ -285,6 +302,8 @@ pub fn search_signals(
 
 /// A lateral lever arm below this (metres) is left in the speed (it moves Δt by well under 5 ms).
 const MIN_SPEED_LEVER_M: f64 = 0.05;
+/// Half-width of the second speed search around the first answer, seconds.
+const REFINE_S: f64 = 1.0;
 /// The largest lateral lever arm taken out of the speed, metres.
 const MAX_SPEED_LEVER_M: f64 = 3.0;
 
