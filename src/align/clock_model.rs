@@ -318,12 +318,41 @@ pub fn choose_model(
             profile.window_s
         )
     };
-    match chosen {
+    let fits = Fits {
+        constant: c,
+        linear: lin,
+        windows: &w,
+        splits: &splits,
+    };
+    fill(&mut model, &fits, profile, signals, &why);
+    model
+}
+
+/// The fits behind a model choice.
+struct Fits<'a> {
+    constant: Fit,
+    linear: Option<Fit>,
+    windows: &'a [ProfileWindow],
+    splits: &'a [usize],
+}
+
+/// Sets the chosen model's parameters and its one-sentence reason.
+fn fill(
+    model: &mut ClockModel,
+    f: &Fits<'_>,
+    profile: &OffsetProfile,
+    signals: (&Signal, &Signal),
+    why: &str,
+) {
+    match model.model {
         OffsetModel::Constant => {
-            model.reason = format!("constant {:+.3} ± {:.3} s: {why}", whole.0, constant_sigma);
+            model.reason = format!(
+                "constant {:+.3} ± {:.3} s: {why}",
+                model.offset_s, model.sigma_s
+            );
         }
         OffsetModel::Linear => {
-            let l = lin.unwrap_or(c);
+            let l = f.linear.unwrap_or(f.constant);
             model.offset_s = l.a;
             model.sigma_s = l.sigma_a.max(SIGMA_FLOOR_S);
             model.drift_ppm = Some(-l.b * 1e6);
@@ -334,7 +363,7 @@ pub fn choose_model(
             );
         }
         OffsetModel::Piecewise => {
-            model.segments = piecewise_segments(&w, &splits, profile, signals);
+            model.segments = piecewise_segments(f.windows, f.splits, profile, signals);
             if let Some(s) = model
                 .segments
                 .iter()
@@ -348,7 +377,7 @@ pub fn choose_model(
                 .windows(2)
                 .map(|s| {
                     format!(
-                        "{:+.3} → {:+.3} s at {:.0} s",
+                        "{:+.3} → {:+.3} s at {:.0} s after the reference's start",
                         s[0].offset_s, s[1].offset_s, s[1].t_start
                     )
                 })
@@ -356,7 +385,6 @@ pub fn choose_model(
             model.reason = format!("piecewise, {}: {why}", steps.join(", "));
         }
     }
-    model
 }
 
 fn bounds(splits: &[usize], n: usize) -> Vec<usize> {

@@ -127,6 +127,9 @@ pub fn profile_of_signals(
     offset_s: f64,
     profile: &ProfileParams,
 ) -> OffsetProfile {
+    // Shifted by a whole number of coarse steps (the grid's phase does not move with the last
+    // digits of Δt₀); the windows' answers are relative to that.
+    let offset_s = (offset_s / params.coarse_grid_s).round() * params.coarse_grid_s;
     let shifted: Vec<f64> = e.0.iter().map(|t| t + offset_s).collect();
     let (a, b) = (
         r.0[0].max(shifted[0]),

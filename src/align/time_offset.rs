@@ -31,7 +31,6 @@
 
 use nalgebra::Vector3;
 
-use crate::align::auto_params::reference_noise;
 use crate::align::curvature::{curvature_signature, CurvatureParams};
 use crate::align::grid::{grid_span, resample, resample_on_grid, RegularSignal};
 use crate::align::offset_sigma::offset_sigma;
@@ -220,25 +219,28 @@ pub fn estimate_time_offset_excluding(
     // the first answer and taken out of the estimate's speed before a second search.
     match lateral_lever_from_speed((&rt, &rv, &rw), (&et, &ev), first.offset_s, gap) {
         Some(lever) if lever.abs() >= MIN_SPEED_LEVER_M => {
-            // The lever moves Δt by tens of ms: the second search only looks ±REFINE_S around the
-            // first answer (cheap), and keeps the first answer's confidence over the whole range.
+            // The lever moves Δt by tens of ms: rather than a second search (whose fine peak can
+            // jump between neighbouring lags on a change in the last digits), the Gauss–Newton
+            // shift of the corrected speed against the reference, continuous in the data.
             let corrected: Vec<f64> = ev.iter().zip(&ew).map(|(v, w)| v + lever * w).collect();
-            let shifted: Vec<f64> = et.iter().map(|t| t + first.offset_s).collect();
-            let near = OffsetParams {
-                max_offset_s: REFINE_S.min(params.max_offset_s),
-                ..*params
-            };
-            match search_signals(method, (&rt, &rv), (&shifted, &corrected), &near) {
-                Ok(o) if o.offset_s.abs() < near.max_offset_s - near.coarse_grid_s => {
-                    Ok(OffsetEstimate {
-                        offset_s: first.offset_s + o.offset_s,
-                        correlation: o.correlation,
-                        sigma_s: o.sigma_s,
-                        ..first
-                    })
+            let mut offset = first.offset_s;
+            for _ in 0..GAUSS_NEWTON_STEPS {
+                match gauss_newton_shift((&rt, &rv), (&et, &corrected), offset, gap) {
+                    Some(d) if d.abs() <= REFINE_S => offset += d,
+                    _ => return Ok(first),
                 }
-                _ => Ok(first),
             }
+            let centering = if params.speed_mean_removed {
+                Centering::MeanRemoved
+            } else {
+                Centering::Raw
+            };
+            let h = params.coarse_grid_s;
+            Ok(OffsetEstimate {
+                offset_s: offset,
+                sigma_s: offset_sigma((&rt, &rv), (&et, &corrected), offset, h, gap, centering),
+                ..first
+            })
         }
         _ => Ok(first),
     }
@@ -302,8 +304,89 @@ pub fn search_signals(
 
 /// A lateral lever arm below this (metres) is left in the speed (it moves Δt by well under 5 ms).
 const MIN_SPEED_LEVER_M: f64 = 0.05;
-/// Half-width of the second speed search around the first answer, seconds.
-const REFINE_S: f64 = 1.0;
+/// σ of white position noise per coordinate from the norms of the third differences of evenly spaced
+/// samples (|Δ³p| of isotropic noise is σ·√20 times a χ with 3 degrees of freedom, median 1.538):
+/// unlike a per-axis estimate it is the same in every rotated frame, so the speed signal and its
+/// heading rate are too.
+fn isotropic_noise(t: &[f64], p: &[Vector3<f64>]) -> Option<f64> {
+    let n = t.len().min(p.len());
+    if n < 40 {
+        return None;
+    }
+    let mut steps: Vec<f64> = t[..n].windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(f64::total_cmp);
+    let typical = steps[steps.len() / 2];
+    if !(typical > 0.0) {
+        return None;
+    }
+    let even = |dt: f64| (dt - typical).abs() <= 0.2 * typical;
+    let mut d3: Vec<f64> = (3..n)
+        .filter(|&i| (i - 2..=i).all(|k| even(t[k] - t[k - 1])))
+        .map(|i| (p[i] - 3.0 * p[i - 1] + 3.0 * p[i - 2] - p[i - 3]).norm())
+        .filter(|v| v.is_finite())
+        .collect();
+    if d3.len() < 30 {
+        return None;
+    }
+    d3.sort_by(f64::total_cmp);
+    Some(d3[d3.len() / 2] / (20f64.sqrt() * 1.538))
+}
+
+/// The offset at which a lateral lever is measured is rounded to this, seconds.
+const LEVER_GRID_S: f64 = 0.01;
+/// The largest step of the lever-corrected refinement, seconds.
+const REFINE_S: f64 = 0.5;
+/// Gauss–Newton steps of the lever-corrected refinement.
+const GAUSS_NEWTON_STEPS: usize = 3;
+
+/// One Gauss–Newton step δ of e(t) ≈ g·r(t + offset + δ) + c over the estimate's samples (r′ by
+/// central differences of the interpolated reference): δ = Σ r′·(e − g·r − c) / (g·Σ r′²), g and c
+/// from the least squares of e on r at `offset`. `None` when the signals do not determine it.
+fn gauss_newton_shift(
+    (rt, rv): (&[f64], &[f64]),
+    (et, ev): (&[f64], &[f64]),
+    offset: f64,
+    gap: f64,
+) -> Option<f64> {
+    let h = 0.05;
+    let at = |t: f64| -> Option<f64> {
+        let i = rt.partition_point(|&x| x < t);
+        if i == 0 || i >= rt.len() || rt[i] - rt[i - 1] > gap {
+            return None;
+        }
+        let f = (t - rt[i - 1]) / (rt[i] - rt[i - 1]);
+        Some(rv[i - 1] + f * (rv[i] - rv[i - 1]))
+    };
+    let pts: Vec<(f64, f64, f64)> = et
+        .iter()
+        .zip(ev)
+        .filter_map(|(&t, &e)| {
+            let t = t + offset;
+            Some((e, at(t)?, (at(t + h)? - at(t - h)?) / (2.0 * h)))
+        })
+        .collect();
+    let n = pts.len() as f64;
+    if n < 10.0 {
+        return None;
+    }
+    let (me, mr) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let srr: f64 = pts.iter().map(|p| (p.1 - mr).powi(2)).sum();
+    let ser: f64 = pts.iter().map(|p| (p.0 - me) * (p.1 - mr)).sum();
+    let g = ser / srr;
+    let sdd: f64 = pts.iter().map(|p| p.2 * p.2).sum();
+    if !(srr > 0.0 && sdd > 0.0 && g.abs() > 1e-6) {
+        return None;
+    }
+    let num: f64 = pts
+        .iter()
+        .map(|p| p.2 * ((p.0 - me) - g * (p.1 - mr)))
+        .sum();
+    let d = num / (g * sdd);
+    d.is_finite().then_some(d)
+}
 /// The largest lateral lever arm taken out of the speed, metres.
 const MAX_SPEED_LEVER_M: f64 = 3.0;
 
@@ -334,7 +417,7 @@ pub fn method_signal(
             }
         }
         OffsetMethod::Speed => {
-            let noise = reference_noise(t, p).unwrap_or(0.0);
+            let noise = isotropic_noise(t, p).unwrap_or(0.0);
             for v in speed_profile(t, p, params.speed_window_s, gap, noise) {
                 s.0.push(v.t);
                 s.1.push(v.speed);
@@ -365,6 +448,9 @@ fn lateral_lever_from_speed(
     gap: f64,
 ) -> Option<f64> {
     // Normal equations of ev = a·rv + b·rw + c.
+    // At a whole number of 10 ms: d does not move with the last digits of the offset (a rigid
+    // transform of the estimate changes those, and nothing else may).
+    let offset_s = (offset_s / LEVER_GRID_S).round() * LEVER_GRID_S;
     let mut m = nalgebra::Matrix3::<f64>::zeros();
     let mut y = nalgebra::Vector3::<f64>::zeros();
     for (&te, &v) in et.iter().zip(ev) {
@@ -388,6 +474,9 @@ fn lateral_lever_from_speed(
         return None;
     }
     let d = -b / a;
+    // Rounded (1 cm, 0.1 % of gain): the correction must not move with the last digits of the
+    // signals, which differ between frames by the noise estimate's rounding.
+    let (d, a) = ((d * 100.0).round() / 100.0, (a * 1000.0).round() / 1000.0);
     (d.abs() <= MAX_SPEED_LEVER_M).then_some(d * a)
 }
 
