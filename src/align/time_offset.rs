@@ -316,7 +316,7 @@ fn isotropic_noise(t: &[f64], p: &[Vector3<f64>]) -> Option<f64> {
     let mut steps: Vec<f64> = t[..n].windows(2).map(|w| w[1] - w[0]).collect();
     steps.sort_by(f64::total_cmp);
     let typical = steps[steps.len() / 2];
-    if !(typical > 0.0) {
+    if typical.is_nan() || typical <= 0.0 {
         return None;
     }
     let even = |dt: f64| (dt - typical).abs() <= 0.2 * typical;
