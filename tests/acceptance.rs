@@ -146,7 +146,9 @@ fn rigid_transform_of_the_estimate_changes_nothing() {
             let (ea, eb) = (&a.estimates[0], &b.estimates[0]);
             assert!(
                 (ea.time_offset.offset_s - eb.time_offset.offset_s).abs() < 1e-6,
-                "{method:?} Δt"
+                "{method:?} Δt {:?} vs {:?}",
+                ea.time_offset,
+                eb.time_offset
             );
             for (da, db) in ea.drift_error.iter().zip(&eb.drift_error) {
                 for (wa, wb) in da.per_window.iter().zip(&db.per_window) {

@@ -30,6 +30,9 @@ fn example(id: &str) -> Option<(&'static str, &'static str)> {
         "time_offset" => ("-0.25", "-0.25"),
         "t_start" => ("5", "5.0"),
         "t_end" => ("60", "60.0"),
+        "offset_model" => ("piecewise", "\"piecewise\""),
+        "offset_window" => ("30", "30.0"),
+        "offset_step" => ("5", "5.0"),
         "metrics" => ("de,kitti", "[\"de\", \"kitti\"]"),
         _ => return None,
     })
@@ -151,7 +154,7 @@ fn every_parameter_is_the_same_through_flag_manifest_and_preset() {
         assert_eq!(from_flag, by_preset(dir.path(), id, toml), "{id}: preset");
         n += 1;
     }
-    assert!(n >= 19, "only {n} parameters enumerated");
+    assert!(n >= 22, "only {n} parameters enumerated");
 }
 
 #[test]

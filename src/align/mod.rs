@@ -2,9 +2,10 @@
 
 pub mod auto_offset;
 pub mod auto_params;
-pub mod clock_drift;
+pub mod clock_model;
 pub mod curvature;
 pub mod grid;
+pub mod offset_profile;
 pub mod offset_sigma;
 pub mod speed;
 pub mod still;

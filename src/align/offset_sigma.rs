@@ -15,7 +15,7 @@
 //! signal may be the noisy one, so the slope is taken from each in turn and the larger error kept.
 //!
 //! What the residual cannot show is noise that has already moved the peak (at the peak it is no
-//! longer in the residual): [`crate::align::clock_drift`] adds that part by noise injection.
+//! longer in the residual): [`crate::align::offset_profile`] scales it by the scatter of the profile.
 
 use crate::align::grid::resample;
 use crate::align::xcorr::Centering;

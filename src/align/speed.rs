@@ -29,6 +29,12 @@ pub struct SpeedSample {
     pub t: f64,
     /// Chord length over chord duration, m/s.
     pub speed: f64,
+    /// Heading rate of the path over the chord, rad/s (counter-clockwise positive, horizontal plane):
+    /// the turn between the chord's first and second halves over the time between their mid-points;
+    /// 0 when a half is too short to have a heading. A sensor mounted a lateral distance d from
+    /// another on the same body moves at v − ω·d (ω the yaw rate, which the path's heading rate is
+    /// for a lateral lever): [`crate::align::time_offset`] uses it to take that difference out.
+    pub yaw_rate: f64,
 }
 
 /// The windowed speed profile (see the module doc), debiased for white position noise of σ `noise_m`
@@ -86,9 +92,30 @@ pub fn speed_profile(
         out.push(SpeedSample {
             t: 0.5 * (t(j) + t(k)),
             speed: ((p(k) - p(j)).norm_squared() - bias).max(0.0).sqrt() / span,
+            yaw_rate: heading_rate(&t, &p, j, i, k, noise_m),
         });
     }
     out
+}
+
+/// The turn from chord j→m to chord m→k over the time between their mid-points, rad/s; 0 when
+/// either half is shorter than a few noise σ (no heading) or the three samples do not span time.
+fn heading_rate(
+    t: &dyn Fn(usize) -> f64,
+    p: &dyn Fn(usize) -> Vector3<f64>,
+    j: usize,
+    m: usize,
+    k: usize,
+    noise_m: f64,
+) -> f64 {
+    let (a, b) = (p(m) - p(j), p(k) - p(m));
+    let min_len = (5.0 * noise_m).max(1e-3);
+    let dt = 0.5 * (t(k) - t(j));
+    if m <= j || m >= k || a.xy().norm() < min_len || b.xy().norm() < min_len || dt <= 0.0 {
+        return 0.0;
+    }
+    let turn = (a.x * b.y - a.y * b.x).atan2(a.x * b.x + a.y * b.y);
+    turn / dt
 }
 
 #[cfg(test)]

@@ -31,7 +31,6 @@
 
 use nalgebra::Vector3;
 
-use crate::align::auto_params::reference_noise;
 use crate::align::curvature::{curvature_signature, CurvatureParams};
 use crate::align::grid::{grid_span, resample, resample_on_grid, RegularSignal};
 use crate::align::offset_sigma::offset_sigma;
@@ -198,30 +197,94 @@ pub fn estimate_time_offset_excluding(
 ) -> Result<OffsetEstimate> {
     check_params(params)?;
     if method == OffsetMethod::Auto {
-        return crate::align::auto_offset::auto_time_offset(ref_t, ref_p, est_t, est_p, params)
-            .map(|a| a.estimate);
+        // `auto` is decided above the search (crate::align::auto_offset), never inside it.
+        return Err(Error::InvalidArgument(
+            "time offset: `auto` combines several searches; call auto_time_offset".into(),
+        ));
     }
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
-    let signal = |t: &[f64], p: &[Vector3<f64>], what: &str| -> Result<(Vec<f64>, Vec<f64>)> {
-        let s: (Vec<f64>, Vec<f64>) = match method {
-            OffsetMethod::Curvature => curvature_signature(t, p, &params.curvature)
-                .into_iter()
-                .map(|s| (s.t, s.curvature))
-                .unzip(),
-            OffsetMethod::SignedCurvature | OffsetMethod::Auto => {
-                curvature_signature(t, p, &params.curvature)
-                    .into_iter()
-                    .map(|s| (s.t, s.signed_curvature()))
-                    .unzip()
+    let (rt, rv, rw) = without(
+        method_signal(method, ref_t, ref_p, params, "reference")?,
+        ref_exclude,
+    );
+    let (et, ev, ew) = without(
+        method_signal(method, est_t, est_p, params, "estimate")?,
+        est_exclude,
+    );
+    let first = search_signals(method, (&rt, &rv), (&et, &ev), params)?;
+    if method != OffsetMethod::Speed {
+        return Ok(first);
+    }
+    // A lateral lever arm: the estimate's sensor moves at v − ω·d in every turn. Its d is measured at
+    // the first answer and taken out of the estimate's speed before a second search.
+    match lateral_lever_from_speed((&rt, &rv, &rw), (&et, &ev), first.offset_s, gap) {
+        Some(lever) if lever.abs() >= MIN_SPEED_LEVER_M => {
+            // The lever moves Δt by tens of ms: rather than a second search (whose fine peak can
+            // jump between neighbouring lags on a change in the last digits), the Gauss–Newton
+            // shift of the corrected speed against the reference, continuous in the data.
+            let corrected: Vec<f64> = ev.iter().zip(&ew).map(|(v, w)| v + lever * w).collect();
+            let mut offset = first.offset_s;
+            for _ in 0..GAUSS_NEWTON_STEPS {
+                match gauss_newton_shift((&rt, &rv), (&et, &corrected), offset, gap) {
+                    Some(d) if d.abs() <= REFINE_S => offset += d,
+                    _ => return Ok(first),
+                }
             }
-            OffsetMethod::Speed => {
-                let noise = reference_noise(t, p).unwrap_or(0.0);
-                speed_profile(t, p, params.speed_window_s, gap, noise)
+            let centering = if params.speed_mean_removed {
+                Centering::MeanRemoved
+            } else {
+                Centering::Raw
+            };
+            let h = params.coarse_grid_s;
+            Ok(OffsetEstimate {
+                offset_s: offset,
+                sigma_s: offset_sigma((&rt, &rv), (&et, &corrected), offset, h, gap, centering),
+                ..first
+            })
+        }
+        _ => Ok(first),
+    }
+}
+
+/// Both trajectories' signals for `method`, computed once, the estimate's speed freed of a lateral
+/// lever arm measured at `offset_s` (what [`estimate_time_offset`] found): the offset profile
+/// correlates windows of these.
+pub fn prepared_signals(
+    method: OffsetMethod,
+    ref_t: &[f64],
+    ref_p: &[Vector3<f64>],
+    est_t: &[f64],
+    est_p: &[Vector3<f64>],
+    params: &OffsetParams,
+    offset_s: f64,
+) -> Result<(Signal, Signal)> {
+    check_params(params)?;
+    let r = method_signal(method, ref_t, ref_p, params, "reference")?;
+    let mut e = method_signal(method, est_t, est_p, params, "estimate")?;
+    if method == OffsetMethod::Speed {
+        let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
+        if let Some(lever) =
+            lateral_lever_from_speed((&r.0, &r.1, &r.2), (&e.0, &e.1), offset_s, gap)
+                .filter(|l| l.abs() >= MIN_SPEED_LEVER_M)
+        {
+            for (v, w) in e.1.iter_mut().zip(&e.2) {
+                *v += lever * w;
             }
-            .into_iter()
-            .map(|s| (s.t, s.speed))
-            .unzip(),
-        };
+        }
+    }
+    Ok((r, e))
+}
+
+/// The search of one method over two signals already computed (times, values), `est` on the
+/// estimate's clock.
+pub fn search_signals(
+    method: OffsetMethod,
+    reference: (&[f64], &[f64]),
+    estimate: (&[f64], &[f64]),
+    params: &OffsetParams,
+) -> Result<OffsetEstimate> {
+    check_params(params)?;
+    for (s, what) in [(reference, "reference"), (estimate, "estimate")] {
         if s.0.len() < 3 {
             return Err(Error::TooFewSamples {
                 what: format!("{what} {} signal", method.as_str()),
@@ -229,15 +292,203 @@ pub fn estimate_time_offset_excluding(
                 need: 3,
             });
         }
-        Ok(s)
-    };
-    let (rt, rv) = without(signal(ref_t, ref_p, "reference")?, ref_exclude);
-    let (et, ev) = without(signal(est_t, est_p, "estimate")?, est_exclude);
+    }
     let centering = match method {
         OffsetMethod::Speed if params.speed_mean_removed => Centering::MeanRemoved,
         OffsetMethod::SignedCurvature | OffsetMethod::Auto => Centering::MeanRemoved,
         _ => Centering::Raw,
     };
+    let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
+    search(method, reference, estimate, params, centering, gap)
+}
+
+/// A lateral lever arm below this (metres) is left in the speed (it moves Δt by well under 5 ms).
+const MIN_SPEED_LEVER_M: f64 = 0.05;
+/// σ of white position noise per coordinate from the norms of the third differences of evenly spaced
+/// samples (|Δ³p| of isotropic noise is σ·√20 times a χ with 3 degrees of freedom, median 1.538):
+/// unlike a per-axis estimate it is the same in every rotated frame, so the speed signal and its
+/// heading rate are too.
+fn isotropic_noise(t: &[f64], p: &[Vector3<f64>]) -> Option<f64> {
+    let n = t.len().min(p.len());
+    if n < 40 {
+        return None;
+    }
+    let mut steps: Vec<f64> = t[..n].windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(f64::total_cmp);
+    let typical = steps[steps.len() / 2];
+    if typical.is_nan() || typical <= 0.0 {
+        return None;
+    }
+    let even = |dt: f64| (dt - typical).abs() <= 0.2 * typical;
+    let mut d3: Vec<f64> = (3..n)
+        .filter(|&i| (i - 2..=i).all(|k| even(t[k] - t[k - 1])))
+        .map(|i| (p[i] - 3.0 * p[i - 1] + 3.0 * p[i - 2] - p[i - 3]).norm())
+        .filter(|v| v.is_finite())
+        .collect();
+    if d3.len() < 30 {
+        return None;
+    }
+    d3.sort_by(f64::total_cmp);
+    Some(d3[d3.len() / 2] / (20f64.sqrt() * 1.538))
+}
+
+/// The offset at which a lateral lever is measured is rounded to this, seconds.
+const LEVER_GRID_S: f64 = 0.01;
+/// The largest step of the lever-corrected refinement, seconds.
+const REFINE_S: f64 = 0.5;
+/// Gauss–Newton steps of the lever-corrected refinement.
+const GAUSS_NEWTON_STEPS: usize = 3;
+
+/// One Gauss–Newton step δ of e(t) ≈ g·r(t + offset + δ) + c over the estimate's samples (r′ by
+/// central differences of the interpolated reference): δ = Σ r′·(e − g·r − c) / (g·Σ r′²), g and c
+/// from the least squares of e on r at `offset`. `None` when the signals do not determine it.
+fn gauss_newton_shift(
+    (rt, rv): (&[f64], &[f64]),
+    (et, ev): (&[f64], &[f64]),
+    offset: f64,
+    gap: f64,
+) -> Option<f64> {
+    let h = 0.05;
+    let at = |t: f64| -> Option<f64> {
+        let i = rt.partition_point(|&x| x < t);
+        if i == 0 || i >= rt.len() || rt[i] - rt[i - 1] > gap {
+            return None;
+        }
+        let f = (t - rt[i - 1]) / (rt[i] - rt[i - 1]);
+        Some(rv[i - 1] + f * (rv[i] - rv[i - 1]))
+    };
+    let pts: Vec<(f64, f64, f64)> = et
+        .iter()
+        .zip(ev)
+        .filter_map(|(&t, &e)| {
+            let t = t + offset;
+            Some((e, at(t)?, (at(t + h)? - at(t - h)?) / (2.0 * h)))
+        })
+        .collect();
+    let n = pts.len() as f64;
+    if n < 10.0 {
+        return None;
+    }
+    let (me, mr) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let srr: f64 = pts.iter().map(|p| (p.1 - mr).powi(2)).sum();
+    let ser: f64 = pts.iter().map(|p| (p.0 - me) * (p.1 - mr)).sum();
+    let g = ser / srr;
+    let sdd: f64 = pts.iter().map(|p| p.2 * p.2).sum();
+    if !(srr > 0.0 && sdd > 0.0 && g.abs() > 1e-6) {
+        return None;
+    }
+    let num: f64 = pts
+        .iter()
+        .map(|p| p.2 * ((p.0 - me) - g * (p.1 - mr)))
+        .sum();
+    let d = num / (g * sdd);
+    d.is_finite().then_some(d)
+}
+/// The largest lateral lever arm taken out of the speed, metres.
+const MAX_SPEED_LEVER_M: f64 = 3.0;
+
+/// Times, values and (speed only) heading rates of one trajectory's signal for `method`.
+pub type Signal = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// The signal `method` correlates, computed once per trajectory (the profile windows reuse it).
+pub fn method_signal(
+    method: OffsetMethod,
+    t: &[f64],
+    p: &[Vector3<f64>],
+    params: &OffsetParams,
+    what: &str,
+) -> Result<Signal> {
+    let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
+    let mut s: Signal = (Vec::new(), Vec::new(), Vec::new());
+    match method {
+        OffsetMethod::Curvature => {
+            for c in curvature_signature(t, p, &params.curvature) {
+                s.0.push(c.t);
+                s.1.push(c.curvature);
+            }
+        }
+        OffsetMethod::SignedCurvature | OffsetMethod::Auto => {
+            for c in curvature_signature(t, p, &params.curvature) {
+                s.0.push(c.t);
+                s.1.push(c.signed_curvature());
+            }
+        }
+        OffsetMethod::Speed => {
+            let noise = isotropic_noise(t, p).unwrap_or(0.0);
+            for v in speed_profile(t, p, params.speed_window_s, gap, noise) {
+                s.0.push(v.t);
+                s.1.push(v.speed);
+                s.2.push(v.yaw_rate);
+            }
+        }
+    }
+    if s.0.len() < 3 {
+        return Err(Error::TooFewSamples {
+            what: format!("{what} {} signal", method.as_str()),
+            n: s.0.len(),
+            need: 3,
+        });
+    }
+    if s.2.is_empty() {
+        s.2 = vec![0.0; s.0.len()];
+    }
+    Ok(s)
+}
+
+/// The lateral lever arm d (metres, estimate sensor to the left of the reference's positive) that
+/// best explains the estimate's speed at `offset_s` as a·(v_ref − ω_ref·d) + c, by least squares over
+/// the estimate's samples; `None` when the turns do not determine it or it is implausible.
+fn lateral_lever_from_speed(
+    (rt, rv, rw): (&[f64], &[f64], &[f64]),
+    (et, ev): (&[f64], &[f64]),
+    offset_s: f64,
+    gap: f64,
+) -> Option<f64> {
+    // Normal equations of ev = a·rv + b·rw + c.
+    // At a whole number of 10 ms: d does not move with the last digits of the offset (a rigid
+    // transform of the estimate changes those, and nothing else may).
+    let offset_s = (offset_s / LEVER_GRID_S).round() * LEVER_GRID_S;
+    let mut m = nalgebra::Matrix3::<f64>::zeros();
+    let mut y = nalgebra::Vector3::<f64>::zeros();
+    for (&te, &v) in et.iter().zip(ev) {
+        let t = te + offset_s;
+        let i = rt.partition_point(|&x| x < t);
+        if i == 0 || i >= rt.len() || rt[i] - rt[i - 1] > gap {
+            continue;
+        }
+        let f = (t - rt[i - 1]) / (rt[i] - rt[i - 1]);
+        let x = nalgebra::Vector3::new(
+            rv[i - 1] + f * (rv[i] - rv[i - 1]),
+            rw[i - 1] + f * (rw[i] - rw[i - 1]),
+            1.0,
+        );
+        m += x * x.transpose();
+        y += x * v;
+    }
+    let sol = m.try_inverse()? * y;
+    let (a, b) = (sol[0], sol[1]);
+    if a.abs() < 0.1 || !b.is_finite() {
+        return None;
+    }
+    let d = -b / a;
+    // Rounded (1 cm, 0.1 % of gain): the correction must not move with the last digits of the
+    // signals, which differ between frames by the noise estimate's rounding.
+    let (d, a) = ((d * 100.0).round() / 100.0, (a * 1000.0).round() / 1000.0);
+    (d.abs() <= MAX_SPEED_LEVER_M).then_some(d * a)
+}
+
+/// The two-stage search (see the module doc) over two signals already computed.
+fn search(
+    method: OffsetMethod,
+    (rt, rv): (&[f64], &[f64]),
+    (et, ev): (&[f64], &[f64]),
+    params: &OffsetParams,
+    centering: Centering,
+    gap: f64,
+) -> Result<OffsetEstimate> {
     let no_overlap = || Error::NoOverlap {
         estimate: format!("estimate {} signal", method.as_str()),
         est_start: et[0],
@@ -246,11 +497,10 @@ pub fn estimate_time_offset_excluding(
         ref_end: rt[rt.len() - 1],
         offset: params.max_offset_s,
     };
-
     // Coarse stage: lag k pairs est grid point n with ref grid point n + k, i.e. Δt = k·h.
     let h = params.coarse_grid_s;
-    let e = resample(&et, &ev, h, gap);
-    let r = resample(&rt, &rv, h, gap);
+    let e = resample(et, ev, h, gap);
+    let r = resample(rt, rv, h, gap);
     let (e_def, r_def) = (e.defined_count(), r.defined_count());
     if e_def < 3 || r_def < 3 {
         return Err(no_overlap());
@@ -301,7 +551,7 @@ pub fn estimate_time_offset_excluding(
     let hi = ((coarse_offset + FINE_WINDOW_COARSE_STEPS * h) / hf).round() as i64;
     let kf_max = (params.max_offset_s / hf).floor() as i64;
     let (lo, hi) = (lo.max(-kf_max), hi.min(kf_max));
-    let sums = fine_sums(&et, &ev, &rt, &rv, hf, gap, lo, hi);
+    let sums = fine_sums(et, ev, rt, rv, hf, gap, lo, hi);
     let fine: Vec<f64> = sums.iter().map(|s| s.ncc(centering)).collect();
     let fine_min_overlap = sums.iter().map(|s| s.n).fold(0.0, f64::max) * MIN_OVERLAP_SHARE;
     let Some(j) = (0..fine.len())
@@ -326,7 +576,7 @@ pub fn estimate_time_offset_excluding(
         * (overlap_fraction / OVERLAP_FULL).clamp(0.0, 1.0)
         * (defined_fraction / DEFINED_FULL).clamp(0.0, 1.0))
     .clamp(0.0, 1.0);
-    let sigma_s = offset_sigma((&rt, &rv), (&et, &ev), offset, h, gap, centering);
+    let sigma_s = offset_sigma((rt, rv), (et, ev), offset, h, gap, centering);
     let status = if confidence >= MIN_CONFIDENCE && peak >= MIN_CORRELATION && !at_edge {
         OffsetStatus::Ok
     } else {
@@ -348,14 +598,19 @@ pub fn estimate_time_offset_excluding(
 
 /// The samples of `(t, v)` outside every interval of `exclude` (the grid does not interpolate across
 /// the hole when it is longer than the largest gap bridged).
-fn without((t, v): (Vec<f64>, Vec<f64>), exclude: &[(f64, f64)]) -> (Vec<f64>, Vec<f64>) {
+fn without((t, v, w): Signal, exclude: &[(f64, f64)]) -> Signal {
     if exclude.is_empty() {
-        return (t, v);
+        return (t, v, w);
     }
-    t.into_iter()
-        .zip(v)
-        .filter(|(ti, _)| !exclude.iter().any(|&(a, b)| *ti >= a && *ti <= b))
-        .unzip()
+    let mut out: Signal = (Vec::new(), Vec::new(), Vec::new());
+    for ((ti, vi), wi) in t.into_iter().zip(v).zip(w) {
+        if !exclude.iter().any(|&(a, b)| ti >= a && ti <= b) {
+            out.0.push(ti);
+            out.1.push(vi);
+            out.2.push(wi);
+        }
+    }
+    out
 }
 
 fn check_params(p: &OffsetParams) -> Result<()> {

@@ -222,6 +222,10 @@ pub struct EvalConfig {
     /// `--metrics de,ape,rpe,kitti`: which metrics each estimate gets (evo's APE/RPE on the
     /// time-aligned estimate beside Drift Error).
     pub metrics: crate::metrics::standard::in_eval::MetricSet,
+    /// `--offset-model`: the clock model fitted to the offset profile; `None`: chosen from it.
+    pub offset_model: Option<crate::align::clock_model::OffsetModel>,
+    /// `--offset-window`/`--offset-step` of the offset profile (`None`: from the data).
+    pub offset_profile: crate::align::offset_profile::ProfileParams,
 }
 
 impl EvalConfig {
@@ -260,6 +264,8 @@ impl EvalConfig {
             reference_lever: None,
             estimate_levers: Vec::new(),
             metrics: Default::default(),
+            offset_model: None,
+            offset_profile: Default::default(),
         }
     }
 
@@ -413,6 +419,12 @@ impl EvalConfig {
             positive("--dt-max", v)?;
         }
         positive("--max-offset", self.max_offset_s)?;
+        if let Some(w) = self.offset_profile.window_s {
+            positive("--offset-window", w)?;
+        }
+        if let Some(w) = self.offset_profile.step_s {
+            positive("--offset-step", w)?;
+        }
         positive("--grid", self.grid_s)?;
         if self.lever_arm_m.is_nan() || self.lever_arm_m < 0.0 {
             return bad(format!("--lever-arm must be ≥ 0, got {}", self.lever_arm_m));

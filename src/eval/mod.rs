@@ -13,13 +13,14 @@ use rayon::prelude::*;
 
 use crate::align::auto_offset::auto_time_offset;
 use crate::align::auto_params::auto_params;
-use crate::align::clock_drift::clock_drift;
+use crate::align::clock_model::{clock_model, ClockModel, OffsetModel};
 use crate::align::time_offset::{OffsetEstimate, OffsetMethod, OffsetStatus};
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult};
 use crate::report::json::{
-    AutoParameters, DriftErrorReport, EstimateReport, Input, OffsetMethodReport, Parameters,
-    Report, TimeOffsetReport, Tool, TopicReport, WindowReport, SCHEMA_VERSION,
+    AutoParameters, DriftErrorReport, EstimateReport, Input, OffsetMethodReport,
+    OffsetProfilePoint, OffsetSegmentReport, Parameters, Report, TimeOffsetReport, Tool,
+    TopicReport, WindowReport, SCHEMA_VERSION,
 };
 use crate::sources::{Progress, Warning};
 use config::EvalConfig;
@@ -219,6 +220,8 @@ fn evaluate_estimate(
     let est_t = est.trajectory.times_s(t0_ns);
     let est_p = &est.trajectory.positions;
     let mut warnings = Vec::new();
+    // The clock model applied to the estimate's stamps (`None`: a constant `applied_s`).
+    let mut clock: Option<ClockModel> = None;
 
     let time_offset = match config.time_offset_s {
         Some(dt) => TimeOffsetReport {
@@ -227,6 +230,7 @@ fn evaluate_estimate(
             applied_s: dt,
             status: "given".into(),
             reason: Some("given with --time-offset".into()),
+            model: Some(OffsetModel::Constant),
             ..Default::default()
         },
         None => {
@@ -266,35 +270,28 @@ fn evaluate_estimate(
             };
             match chosen {
                 Some(Ok(o)) if o.status == OffsetStatus::Ok => {
-                    let drift =
-                        clock_drift(o.method, &ref_t, ref_p, &est_t, est_p, &params, o.offset_s);
-                    if let Some(d) = drift.filter(|d| d.significant) {
-                        warnings.push(Warning {
-                            code: "clock_drift_suspected".into(),
-                            message: format!(
-                                "{}: Δt is {:+.3} s on the first third and {:+.3} s on the last ({:+.0} ± {:.0} ppm): a single offset does not fit the whole mission; crop with --t-start/--t-end",
-                                est.name, d.first_third_s, d.last_third_s, d.measured_ppm, d.sigma_ppm
-                            ),
-                        });
-                    }
+                    let (report, model, w) = over_time(
+                        config,
+                        &params,
+                        (&ref_t, ref_p),
+                        (&est_t, est_p),
+                        &o,
+                        &est.name,
+                        t0_ns,
+                    );
+                    warnings.extend(w);
+                    clock = model;
                     TimeOffsetReport {
                         method: o.method.as_str().into(),
-                        offset_s: o.offset_s,
-                        applied_s: o.offset_s,
+                        offset_s: report.offset_s,
+                        applied_s: report.offset_s,
                         correlation: Some(o.correlation),
                         confidence: Some(o.confidence),
                         status: "ok".into(),
                         methods,
                         reason: Some(reason),
                         implied_lever_arm_m: implied_lever,
-                        first_third_s: drift.map(|d| d.first_third_s),
-                        last_third_s: drift.map(|d| d.last_third_s),
-                        drift_ppm: drift.map(|d| d.drift_ppm),
-                        drift_resolution_ppm: drift.map(|d| d.resolution_ppm),
-                        drift_measured_ppm: drift.map(|d| d.measured_ppm),
-                        drift_sigma_ppm: drift.map(|d| d.sigma_ppm),
-                        first_third_sigma_s: drift.map(|d| d.first_sigma_s),
-                        last_third_sigma_s: drift.map(|d| d.last_sigma_s),
+                        ..report
                     }
                 }
                 Some(Err(e @ Error::NoOverlap { .. })) => {
@@ -341,7 +338,10 @@ fn evaluate_estimate(
 
     // Shift onto the reference clock and crop like the reference.
     let applied_ns = (time_offset.applied_s * 1e9).round() as i64;
-    let mut aligned = est.trajectory.shifted(applied_ns);
+    let mut aligned = match clock.as_ref().filter(|c| c.model != OffsetModel::Constant) {
+        Some(c) => on_reference_clock(&est.trajectory, c, t0_ns),
+        None => est.trajectory.shifted(applied_ns),
+    };
     aligned.crop(crop.0, crop.1);
     let aligned_t = aligned.times_s(t0_ns);
     if aligned.len() < 3 {
@@ -476,4 +476,126 @@ fn drift_report(r: &DriftErrorResult, t0_s: f64) -> DriftErrorReport {
         scale: r.lever_fit.map(|f| f.scale),
         lateral_lever_m: r.lever_fit.map(|f| f.lateral_lever_m),
     }
+}
+
+/// The offset profile of the applied method around its whole-mission answer `o`, the clock model
+/// (chosen or `--offset-model`), its report fields and the warnings of a non-constant model chosen
+/// from the data. On a mission too short for a profile: a constant model and no profile.
+#[allow(clippy::too_many_arguments)]
+fn over_time(
+    config: &EvalConfig,
+    params: &crate::align::time_offset::OffsetParams,
+    (ref_t, ref_p): (&[f64], &[nalgebra::Vector3<f64>]),
+    (est_t, est_p): (&[f64], &[nalgebra::Vector3<f64>]),
+    o: &OffsetEstimate,
+    name: &str,
+    t0_ns: i64,
+) -> (TimeOffsetReport, Option<ClockModel>, Vec<Warning>) {
+    let t0_s = t0_ns as f64 * 1e-9;
+    let found = clock_model(
+        ref_t,
+        ref_p,
+        est_t,
+        est_p,
+        params,
+        o,
+        &config.offset_profile,
+        config.offset_model,
+    );
+    let Ok((profile, model)) = found else {
+        let reason = "constant: no offset profile (too short an overlap)".to_string();
+        return (
+            TimeOffsetReport {
+                offset_s: o.offset_s,
+                sigma_s: o.sigma_s,
+                model: Some(OffsetModel::Constant),
+                model_reason: Some(reason),
+                ..Default::default()
+            },
+            None,
+            Vec::new(),
+        );
+    };
+    let mut warnings = Vec::new();
+    if config.offset_model.is_none() {
+        let code = match model.model {
+            OffsetModel::Linear => Some("clock_drift_suspected"),
+            OffsetModel::Piecewise => Some("clock_step_suspected"),
+            OffsetModel::Constant => None,
+        };
+        if let Some(code) = code {
+            warnings.push(Warning {
+                code: code.into(),
+                message: format!(
+                    "{name}: the clock offset is not constant — {}; the estimate's stamps were corrected by this model (force one with --offset-model)",
+                    model.reason
+                ),
+            });
+        }
+    }
+    let report = TimeOffsetReport {
+        offset_s: model.offset_s,
+        sigma_s: Some(model.sigma_s),
+        model: Some(model.model),
+        model_reason: Some(model.reason.clone()),
+        drift_measured_ppm: model.drift_ppm,
+        drift_sigma_ppm: model.drift_sigma_ppm,
+        drift_ppm: model
+            .drift_ppm
+            .filter(|_| model.model == OffsetModel::Linear),
+        drift_resolution_ppm: model.drift_sigma_ppm.map(|s| 3.0 * s),
+        segments: model
+            .segments
+            .iter()
+            .map(|s| OffsetSegmentReport {
+                t_start: s.t_start + t0_s,
+                t_end: s.t_end + t0_s,
+                offset_s: s.offset_s,
+                sigma_s: s.sigma_s,
+            })
+            .collect(),
+        profile: profile
+            .windows
+            .iter()
+            .map(|w| OffsetProfilePoint {
+                t: w.t + t0_s,
+                offset_s: w.offset_s,
+                sigma_s: w.sigma_s,
+                correlation: w.correlation,
+            })
+            .collect(),
+        profile_window_s: Some(profile.window_s),
+        profile_step_s: Some(profile.step_s),
+        ..Default::default()
+    };
+    (report, Some(model), warnings)
+}
+
+/// `trajectory` (stamps on the estimate's clock) with every stamp mapped onto the reference clock by
+/// `model`; samples the model maps nowhere, or not after the previous one (a backward clock step
+/// repeats a stretch of stamps), are dropped.
+fn on_reference_clock(
+    trajectory: &crate::trajectory::Trajectory,
+    model: &ClockModel,
+    t0_ns: i64,
+) -> crate::trajectory::Trajectory {
+    let mut out = crate::trajectory::Trajectory::new(trajectory.orientations.is_some());
+    for (i, (&ns, p)) in trajectory
+        .stamps_ns
+        .iter()
+        .zip(&trajectory.positions)
+        .enumerate()
+    {
+        let t = (ns - t0_ns) as f64 * 1e-9;
+        let Some(tr) = model.to_reference(t) else {
+            continue;
+        };
+        let stamp = t0_ns + (tr * 1e9).round() as i64;
+        if out.stamps_ns.last().is_some_and(|&last| stamp <= last) {
+            continue;
+        }
+        let q = trajectory.orientations.as_ref().map(|o| o[i]);
+        out.push(stamp, *p, q);
+    }
+    out
 }

@@ -8,6 +8,7 @@
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use serde::{Deserialize, Deserializer};
 
+use crate::align::clock_model::{ModelChoice, OffsetModel};
 use crate::align::time_offset::OffsetMethod;
 use crate::error::Result;
 use crate::eval::config::{EvalConfig, Platform};
@@ -70,6 +71,17 @@ pub struct Parameters {
     #[arg(long, value_name = "WORD", value_parser = word::<OffsetMethod>())]
     #[serde(default, deserialize_with = "opt_word")]
     pub offset_method: Option<OffsetMethod>,
+    /// Clock model of the time offset: constant, linear (a drift), piecewise (steps), or auto (chosen
+    /// from the offset profile; constant unless the data refute it) [default: auto].
+    #[arg(long, value_name = "WORD", value_parser = word::<ModelChoice>())]
+    #[serde(default, deserialize_with = "opt_word")]
+    pub offset_model: Option<ModelChoice>,
+    /// Window of the offset profile, seconds [default: a tenth of the overlap, in 20–120 s].
+    #[arg(long, value_name = "S")]
+    pub offset_window: Option<f64>,
+    /// Step of the offset profile, seconds [default: half the window].
+    #[arg(long, value_name = "S")]
+    pub offset_step: Option<f64>,
     /// Largest offset searched, seconds (GPS time and UTC alone differ by 18 s) [default: 30].
     #[arg(long, value_name = "S")]
     pub max_offset: Option<f64>,
@@ -110,6 +122,9 @@ impl Parameters {
             lever_correction: self.lever_correction.or(lower.lever_correction),
             lever_arm: self.lever_arm.or(lower.lever_arm),
             offset_method: self.offset_method.or(lower.offset_method),
+            offset_model: self.offset_model.or(lower.offset_model),
+            offset_window: self.offset_window.or(lower.offset_window),
+            offset_step: self.offset_step.or(lower.offset_step),
             max_offset: self.max_offset.or(lower.max_offset),
             grid: self.grid.or(lower.grid),
             time_offset: self.time_offset.or(lower.time_offset),
@@ -151,6 +166,11 @@ impl Parameters {
         c.lever_correction = self.lever_correction.unwrap_or(c.lever_correction);
         set(&mut c.lever_arm_m, self.lever_arm);
         c.offset_method = self.offset_method.unwrap_or(c.offset_method);
+        if let Some(m) = self.offset_model {
+            c.offset_model = m.forced();
+        }
+        c.offset_profile.window_s = self.offset_window.or(c.offset_profile.window_s);
+        c.offset_profile.step_s = self.offset_step.or(c.offset_profile.step_s);
         set(&mut c.max_offset_s, self.max_offset);
         set(&mut c.grid_s, self.grid);
         c.time_offset_s = self.time_offset.or(c.time_offset_s);
@@ -255,6 +275,21 @@ fn opt_words<'de, D: Deserializer<'de>, T: Word>(d: D) -> Result<Option<Vec<T>>,
         .map(Some)
 }
 
+impl Word for ModelChoice {
+    const ALL: &'static [Self] = &[
+        ModelChoice::Auto,
+        ModelChoice::Fixed(OffsetModel::Constant),
+        ModelChoice::Fixed(OffsetModel::Linear),
+        ModelChoice::Fixed(OffsetModel::Piecewise),
+    ];
+    fn word(self) -> &'static str {
+        match self {
+            ModelChoice::Auto => "auto",
+            ModelChoice::Fixed(m) => m.as_str(),
+        }
+    }
+}
+
 impl Word for EvalMetric {
     const ALL: &'static [Self] = &[
         EvalMetric::De,
@@ -334,6 +369,7 @@ mod tests {
                 "origin" => "1,2,3",
                 "window" => "7",
                 "metrics" => "kitti",
+                "offset_model" => "linear",
                 _ => "0.5",
             };
             let one = from_flags(&[&format!("--{}", id.replace('_', "-")), value]);

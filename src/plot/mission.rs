@@ -66,11 +66,11 @@ pub fn mission_figures(report: &Report, inputs: &Inputs) -> Vec<Figure> {
         }
         let ref_t = reference.trajectory.times_s(t0_ns);
         let t = format!("Time offset of {} over the mission", e.name);
-        let profile = OffsetProfile::from_thirds(
+        let profile = OffsetProfile::from_report(
             t.clone(),
             &e.time_offset,
-            0.0,
-            ref_t.last().copied().unwrap_or(0.0),
+            t0_ns as f64 * 1e-9,
+            (0.0, ref_t.last().copied().unwrap_or(0.0)),
         );
         out.push(fig("offset_profile", t, FigureData::OffsetProfile(profile)));
         let t = format!("Speed of the reference and of aligned {}", e.name);

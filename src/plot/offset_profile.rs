@@ -2,14 +2,14 @@
 //! for the whole mission (constant, drift, steps) drawn over it, so a drifting or stepping clock is
 //! seen at once.
 //!
-//! The figure takes plain data ([`OffsetProfile`]) in the shape of the report's
-//! `time_offset.profile` / `model` / `segments`; [`OffsetProfile::from_thirds`] builds it from what
-//! the report holds today (the offsets of the first and last third).
+//! The figure takes plain data ([`OffsetProfile`]); [`OffsetProfile::from_report`] builds it from the
+//! report's `time_offset.profile` / `model` / `segments`.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::style::{legend, padded_range, plot_err, series_color, xy_chart, Chart, Draw};
+use crate::align::clock_model::OffsetModel;
 use crate::error::Result;
 use crate::report::json::TimeOffsetReport;
 
@@ -21,24 +21,6 @@ pub struct ProfilePoint {
     pub offset_s: f64,
     pub sigma_s: Option<f64>,
     pub correlation: Option<f64>,
-}
-
-/// The clock model chosen for the mission (`time_offset.model`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum OffsetModel {
-    Constant,
-    Drift,
-    Steps,
-}
-
-impl OffsetModel {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            OffsetModel::Constant => "constant",
-            OffsetModel::Drift => "drift",
-            OffsetModel::Steps => "steps",
-        }
-    }
 }
 
 /// A piece of the model: Δt from `offset_s` at `t_start` to `offset_end_s` at `t_end`
@@ -62,40 +44,61 @@ pub struct OffsetProfile {
 }
 
 impl OffsetProfile {
-    /// From today's report: the first- and last-third offsets (at the thirds' middles) and the applied
-    /// Δt as a constant model over `[t_first, t_last]` (seconds from the reference's start).
-    pub fn from_thirds(title: String, o: &TimeOffsetReport, t_first: f64, t_last: f64) -> Self {
-        let span = t_last - t_first;
-        let third = |t: f64, v: Option<f64>, s: Option<f64>| {
-            v.map(|offset_s| ProfilePoint {
-                t,
-                offset_s,
-                sigma_s: s,
-                correlation: None,
+    /// From the report's `time_offset`: its profile windows, and the chosen model drawn over
+    /// `[t_first, t_last]`. Times are shown in seconds from `t0` (the reference's first stamp, the
+    /// report's times are absolute). A linear model is drawn through the headline Δt at the middle of
+    /// the profile's span with the reported drift as its slope.
+    pub fn from_report(
+        title: String,
+        o: &TimeOffsetReport,
+        t0: f64,
+        (t_first, t_last): (f64, f64),
+    ) -> Self {
+        let points = o
+            .profile
+            .iter()
+            .map(|p| ProfilePoint {
+                t: p.t - t0,
+                offset_s: p.offset_s,
+                sigma_s: Some(p.sigma_s),
+                correlation: Some(p.correlation),
             })
+            .collect::<Vec<_>>();
+        let model = o.model.unwrap_or(OffsetModel::Constant);
+        let flat = |t_start: f64, t_end: f64, offset_s: f64, sigma_s: Option<f64>| Segment {
+            t_start,
+            t_end,
+            offset_s,
+            offset_end_s: offset_s,
+            sigma_s,
         };
-        let points = [
-            third(t_first + span / 6.0, o.first_third_s, o.first_third_sigma_s),
-            third(
-                t_first + 5.0 * span / 6.0,
-                o.last_third_s,
-                o.last_third_sigma_s,
-            ),
-        ]
-        .into_iter()
-        .flatten()
-        .collect();
+        let segments = match model {
+            OffsetModel::Piecewise if !o.segments.is_empty() => o
+                .segments
+                .iter()
+                .map(|s| flat(s.t_start - t0, s.t_end - t0, s.offset_s, Some(s.sigma_s)))
+                .collect(),
+            OffsetModel::Linear => {
+                let mid = match (points.first(), points.last()) {
+                    (Some(a), Some(b)) => 0.5 * (a.t + b.t),
+                    _ => 0.5 * (t_first + t_last),
+                };
+                let slope = -o.drift_ppm.unwrap_or(0.0) * 1e-6;
+                vec![Segment {
+                    t_start: t_first,
+                    t_end: t_last,
+                    offset_s: o.applied_s + slope * (t_first - mid),
+                    offset_end_s: o.applied_s + slope * (t_last - mid),
+                    sigma_s: o.sigma_s,
+                }]
+            }
+            _ => vec![flat(t_first, t_last, o.applied_s, o.sigma_s)],
+        };
         OffsetProfile {
             title,
             points,
-            model: OffsetModel::Constant,
-            segments: vec![Segment {
-                t_start: t_first,
-                t_end: t_last,
-                offset_s: o.applied_s,
-                offset_end_s: o.applied_s,
-                sigma_s: None,
-            }],
+            model,
+            segments,
         }
     }
 }

@@ -155,12 +155,15 @@ fn offset_section(e: &EstimateReport) -> String {
             &rows,
         );
     }
-    if let (Some(a), Some(b)) = (o.first_third_s, o.last_third_s) {
+    if let Some(m) = o.model {
         let _ = writeln!(
             s,
-            "<p>Δt on the first third {a:+.4} s, on the last third {b:+.4} s{}.</p>",
+            "<p>Clock model: {} ({}), from {} profile windows{}.</p>",
+            m.as_str(),
+            escape(o.model_reason.as_deref().unwrap_or("")),
+            o.profile.len(),
             o.drift_measured_ppm
-                .map_or(String::new(), |p| format!(" ({p:+.0} ppm)"))
+                .map_or(String::new(), |p| format!("; linear fit {p:+.0} ppm"))
         );
     }
     s

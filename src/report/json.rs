@@ -163,30 +163,58 @@ pub struct TimeOffsetReport {
     /// v·(Δt_signed-curvature − Δt_speed) when both were confident and disagreed, metres.
     #[serde(default)]
     pub implied_lever_arm_m: Option<f64>,
-    /// Δt on the first and the last third of the overlap, seconds, with their standard errors (see
-    /// [`crate::align::clock_drift`]).
-    #[serde(default)]
-    pub first_third_s: Option<f64>,
-    #[serde(default)]
-    pub last_third_s: Option<f64>,
-    #[serde(default)]
-    pub first_third_sigma_s: Option<f64>,
-    #[serde(default)]
-    pub last_third_sigma_s: Option<f64>,
-    /// The clock drift the thirds imply, ppm (positive: the estimate's clock runs fast, Δt shrinks
-    /// with time), and its standard error.
+    /// The drift of a linear fit over the offset profile, ppm (positive: the estimate's clock runs
+    /// fast, Δt shrinks with time), and its standard error (see [`crate::align::clock_model`]).
     #[serde(default)]
     pub drift_measured_ppm: Option<f64>,
     #[serde(default)]
     pub drift_sigma_ppm: Option<f64>,
-    /// The drift concluded: `drift_measured_ppm` when it exceeds 3 `drift_sigma_ppm`, else 0 (a
-    /// constant offset fits).
+    /// The drift applied: set only when `model` is `linear`.
     #[serde(default)]
     pub drift_ppm: Option<f64>,
-    /// The smallest drift the mission resolves, 3 `drift_sigma_ppm` (hundreds of ppm on a few
-    /// minutes, a few ppm on hours).
+    /// The smallest drift the mission resolves, 3 `drift_sigma_ppm`.
     #[serde(default)]
     pub drift_resolution_ppm: Option<f64>,
+    /// The clock model applied to the estimate's stamps (`constant`, `linear`, `piecewise`).
+    #[serde(default)]
+    pub model: Option<crate::align::clock_model::OffsetModel>,
+    /// Why that model, in one sentence.
+    #[serde(default)]
+    pub model_reason: Option<String>,
+    /// Standard error of the headline `offset_s`, seconds (constant: the whole mission's; linear: at
+    /// the profile's mid-time; piecewise: the longest segment's).
+    #[serde(default)]
+    pub sigma_s: Option<f64>,
+    /// Piecewise: the segments of constant offset, absolute seconds on the reference clock.
+    #[serde(default)]
+    pub segments: Vec<OffsetSegmentReport>,
+    /// The offset profile: Δt over sliding windows, window centres absolute seconds on the reference
+    /// clock.
+    #[serde(default)]
+    pub profile: Vec<OffsetProfilePoint>,
+    /// Window and step of the profile, seconds.
+    #[serde(default)]
+    pub profile_window_s: Option<f64>,
+    #[serde(default)]
+    pub profile_step_s: Option<f64>,
+}
+
+/// One segment of a piecewise clock model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OffsetSegmentReport {
+    pub t_start: f64,
+    pub t_end: f64,
+    pub offset_s: f64,
+    pub sigma_s: f64,
+}
+
+/// One window of the offset profile.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OffsetProfilePoint {
+    pub t: f64,
+    pub offset_s: f64,
+    pub sigma_s: f64,
+    pub correlation: f64,
 }
 
 /// One time-offset method's answer.

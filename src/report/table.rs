@@ -55,12 +55,13 @@ pub fn render(report: &Report) -> String {
                 m.error.as_deref().unwrap_or(&m.status)
             );
         }
-        if let (Some(d), Some(m), Some(sd)) = (o.drift_ppm, o.drift_measured_ppm, o.drift_sigma_ppm)
-        {
+        if let (Some(m), Some(why)) = (o.model, o.model_reason.as_deref()) {
             let _ = writeln!(
                 s,
-                "    clock drift {d:+.0} ppm (measured {m:+.0} ± {sd:.0} ppm between the first and last thirds{})",
-                if d == 0.0 { "; not beyond 3σ, a constant offset fits" } else { "" }
+                "  clock model  {}{} ({why})",
+                m.as_str(),
+                o.sigma_s
+                    .map_or(String::new(), |v| format!(", Δt σ {:.1} ms", v * 1e3))
             );
         }
         let _ = writeln!(

@@ -41,6 +41,21 @@ pub struct MissionConfig {
     /// t0 + (t_true − t0)·(1 + ppm·10⁻⁶) − time_offset (t0 = `start_time_ns`), so Δt falls by ppm µs
     /// per second.
     pub clock_drift_ppm: f64,
+    /// A step of the estimate's clock: from true time `at_s` on, Δt is `offset_s` instead of
+    /// `time_offset_s` (a recorder restart, an NTP correction). Stamps stay increasing only when the
+    /// step is forward or the recorder drops the repeated stretch: samples whose stamp would not
+    /// increase are dropped.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clock_step: Option<ClockStep>,
+}
+
+/// A step of the simulated estimate's clock.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ClockStep {
+    /// True time of the step, seconds from the start.
+    pub at_s: f64,
+    /// Δt from then on, seconds.
+    pub offset_s: f64,
 }
 
 impl Default for MissionConfig {
@@ -59,6 +74,7 @@ impl Default for MissionConfig {
             time_offset_s: 0.2,
             scale_error: 0.02,
             clock_drift_ppm: 0.0,
+            clock_step: None,
         }
     }
 }
@@ -143,7 +159,14 @@ pub fn simulate(config: &MissionConfig, route: &[Segment]) -> Mission {
         let local = r0.inverse() * (p - p0) * (1.0 + config.scale_error);
         let noise = white(&mut rng, config.est_noise_m);
         let t_clock = t_true * (1.0 + config.clock_drift_ppm * 1e-6);
-        let stamp = config.start_time_ns + ((t_clock - config.time_offset_s) * 1e9).round() as i64;
+        let offset = match config.clock_step {
+            Some(s) if t_true >= s.at_s => s.offset_s,
+            _ => config.time_offset_s,
+        };
+        let stamp = config.start_time_ns + ((t_clock - offset) * 1e9).round() as i64;
+        if estimate.stamps_ns.last().is_some_and(|&last| stamp <= last) {
+            continue;
+        }
         estimate.push(stamp, local + noise, Some(r0.inverse() * r));
     }
     Mission {

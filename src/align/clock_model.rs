@@ -1,0 +1,543 @@
+//! Which clock model the offset profile supports: one constant offset, a linear drift, or steps.
+//!
+//! **Criterion.** The Bayesian information criterion over the profile's usable windows with their
+//! σ: BIC = χ²/ρ + k·ln(n/ρ), where ρ = window/step is how many windows see each stretch of the
+//! mission (the windows overlap, so χ² and n are counted ρ times) and k the model's parameters
+//! (constant 1, linear 2, one more mean and one change time per step). Each window's χ² is capped
+//! at [`CHI2_CAP`] (5σ): one window spoiled by a position jump of the estimate (a localiser
+//! correcting itself) cannot decide a model alone. `constant` is kept unless another model lowers the
+//! BIC by at least [`BIC_MARGIN`] ("very strong" evidence on the Kass–Raftery scale) and the profile
+//! holds at least [`MIN_INDEPENDENT_WINDOWS`] independent windows.
+//!
+//! **Steps** are found by binary segmentation (the split of a stretch that lowers its χ² most, kept
+//! while it lowers the BIC by [`BIC_MARGIN`]; at most [`MAX_STEPS`]); a segment spans at least two
+//! independent windows, so a position jump, which spoils a window or two, is not a step. The change
+//! time is then located on the signals themselves ([`locate_change`]), to a few seconds.
+//!
+//! Sign of the drift: `drift_ppm` is positive when the estimate's clock runs fast, so its Δt falls
+//! with time: Δt(t) = Δt(t_mid) − drift_ppm·10⁻⁶·(t − t_mid).
+
+use crate::align::offset_profile::{OffsetProfile, ProfileWindow, SIGMA_FLOOR_S};
+use crate::align::time_offset::Signal;
+
+/// A model must lower the BIC by this much to replace `constant`.
+pub const BIC_MARGIN: f64 = 10.0;
+/// The largest χ² one window contributes.
+pub const CHI2_CAP: f64 = 25.0;
+/// The fewest independent windows (n/ρ) on which a model other than `constant` is chosen.
+pub const MIN_INDEPENDENT_WINDOWS: f64 = 4.0;
+/// The most steps looked for.
+pub const MAX_STEPS: usize = 3;
+
+/// The clock model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OffsetModel {
+    /// One offset for the whole mission.
+    Constant,
+    /// Δt changes linearly with time (the clocks run at different rates).
+    Linear,
+    /// Δt is constant per segment and steps between them (a recorder restart, an NTP correction).
+    Piecewise,
+}
+
+impl OffsetModel {
+    /// The name as on the command line and in reports.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            OffsetModel::Constant => "constant",
+            OffsetModel::Linear => "linear",
+            OffsetModel::Piecewise => "piecewise",
+        }
+    }
+}
+
+/// `--offset-model`: a clock model to fit, or `Auto`: the model chosen from the offset profile.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelChoice {
+    /// Chosen from the profile (BIC; constant unless the data refute it).
+    Auto,
+    /// This model, whatever the profile says.
+    Fixed(OffsetModel),
+}
+
+impl ModelChoice {
+    /// The model forced, if any.
+    pub fn forced(self) -> Option<OffsetModel> {
+        match self {
+            ModelChoice::Auto => None,
+            ModelChoice::Fixed(m) => Some(m),
+        }
+    }
+}
+
+/// One segment of constant offset, absolute seconds on the reference clock (the inputs' origin).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ClockSegment {
+    pub t_start: f64,
+    pub t_end: f64,
+    pub offset_s: f64,
+    pub sigma_s: f64,
+}
+
+/// The chosen model and its parameters.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ClockModel {
+    pub model: OffsetModel,
+    /// Headline Δt, seconds: constant — the whole mission's; linear — at `t_mid`; piecewise — the
+    /// longest segment's.
+    pub offset_s: f64,
+    /// Its standard error, seconds.
+    pub sigma_s: f64,
+    /// Linear: the time Δt = `offset_s`, reference clock, seconds.
+    pub t_mid: f64,
+    /// The linear fit's drift, ppm (positive: the estimate's clock runs fast), and its σ — always
+    /// measured when the profile has two usable windows; applied only when `model` is linear.
+    pub drift_ppm: Option<f64>,
+    pub drift_sigma_ppm: Option<f64>,
+    /// The segments (piecewise; empty otherwise).
+    pub segments: Vec<ClockSegment>,
+    /// BIC of constant, linear and piecewise (NaN when not computed).
+    pub bic: [f64; 3],
+    /// Why this model, in one sentence.
+    pub reason: String,
+}
+
+impl ClockModel {
+    /// A constant model with no profile behind it (too short a mission, or forced without one).
+    pub fn constant(offset_s: f64, sigma_s: f64, reason: String) -> ClockModel {
+        ClockModel {
+            model: OffsetModel::Constant,
+            offset_s,
+            sigma_s,
+            t_mid: 0.0,
+            drift_ppm: None,
+            drift_sigma_ppm: None,
+            segments: Vec::new(),
+            bic: [f64::NAN; 3],
+            reason,
+        }
+    }
+
+    /// Δt at reference time `t`.
+    pub fn offset_at(&self, t: f64) -> f64 {
+        match self.model {
+            OffsetModel::Constant => self.offset_s,
+            OffsetModel::Linear => {
+                self.offset_s - self.drift_ppm.unwrap_or(0.0) * 1e-6 * (t - self.t_mid)
+            }
+            OffsetModel::Piecewise => {
+                let s = self
+                    .segments
+                    .iter()
+                    .find(|s| t < s.t_end)
+                    .or(self.segments.last());
+                s.map_or(self.offset_s, |s| s.offset_s)
+            }
+        }
+    }
+
+    /// An estimate stamp `t_est` (its own clock) on the reference clock; `None` when it falls in the
+    /// stretch a backward step of the clock repeated (a piecewise model maps it into no segment).
+    pub fn to_reference(&self, t_est: f64) -> Option<f64> {
+        match self.model {
+            OffsetModel::Constant => Some(t_est + self.offset_s),
+            OffsetModel::Linear => {
+                // One fixed-point step: Δt varies by ppm·10⁻⁶ of a second per second.
+                let t = t_est + self.offset_s;
+                Some(t_est + self.offset_at(t))
+            }
+            OffsetModel::Piecewise => {
+                let n = self.segments.len();
+                self.segments.iter().enumerate().find_map(|(i, s)| {
+                    let t = t_est + s.offset_s;
+                    let after_start = i == 0 || t >= s.t_start;
+                    let before_end = i + 1 == n || t < s.t_end;
+                    (after_start && before_end).then_some(t)
+                })
+            }
+        }
+    }
+}
+
+/// A fit of one model over windows.
+#[derive(Debug, Clone, Copy)]
+struct Fit {
+    chi2: f64,
+    a: f64,
+    b: f64,
+    sigma_a: f64,
+    sigma_b: f64,
+}
+
+/// Weighted least squares of y = a + b·(t − t0) (`linear`) or y = a, with capped χ².
+fn fit(w: &[ProfileWindow], t0: f64, linear: bool, rho: f64) -> Option<Fit> {
+    let (mut s, mut st, mut stt, mut sy, mut sty) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for p in w {
+        let q = 1.0 / p.sigma_s.powi(2);
+        let t = p.t - t0;
+        s += q;
+        st += q * t;
+        stt += q * t * t;
+        sy += q * p.offset_s;
+        sty += q * t * p.offset_s;
+    }
+    if w.is_empty() || s <= 0.0 {
+        return None;
+    }
+    let (a, b, var_a, var_b) = if linear {
+        let det = s * stt - st * st;
+        if w.len() < 2 || det <= 0.0 {
+            return None;
+        }
+        (
+            (stt * sy - st * sty) / det,
+            (s * sty - st * sy) / det,
+            stt / det,
+            s / det,
+        )
+    } else {
+        (sy / s, 0.0, 1.0 / s, 0.0)
+    };
+    let chi2 = w
+        .iter()
+        .map(|p| {
+            ((p.offset_s - a - b * (p.t - t0)) / p.sigma_s)
+                .powi(2)
+                .min(CHI2_CAP)
+        })
+        .sum();
+    Some(Fit {
+        chi2,
+        a,
+        b,
+        sigma_a: (var_a * rho).sqrt(),
+        sigma_b: (var_b * rho).sqrt(),
+    })
+}
+
+/// Splits of `w` into constant stretches by binary segmentation; returns the split indices (a split
+/// at i: windows ..i and i.. differ).
+fn segment(w: &[ProfileWindow], min_len: usize, rho: f64, n_eff: f64) -> Vec<usize> {
+    let mut splits: Vec<usize> = Vec::new();
+    let penalty = 2.0 * n_eff.max(1.0).ln();
+    for _ in 0..MAX_STEPS {
+        let mut bounds = vec![0];
+        bounds.extend(&splits);
+        bounds.push(w.len());
+        let mut best: Option<(f64, usize)> = None;
+        for k in 0..bounds.len() - 1 {
+            let (lo, hi) = (bounds[k], bounds[k + 1]);
+            let Some(whole) = fit(&w[lo..hi], 0.0, false, rho) else {
+                continue;
+            };
+            for i in lo + min_len..=hi.saturating_sub(min_len) {
+                let (Some(l), Some(r)) = (
+                    fit(&w[lo..i], 0.0, false, rho),
+                    fit(&w[i..hi], 0.0, false, rho),
+                ) else {
+                    continue;
+                };
+                let gain = (whole.chi2 - l.chi2 - r.chi2) / rho;
+                if best.is_none_or(|(g, _)| gain > g) {
+                    best = Some((gain, i));
+                }
+            }
+        }
+        match best {
+            Some((gain, i)) if gain - penalty >= BIC_MARGIN => {
+                splits.push(i);
+                splits.sort_unstable();
+            }
+            _ => break,
+        }
+    }
+    splits
+}
+
+/// Chooses the model from `profile` (see the module doc). `whole` is the whole mission's Δt and its
+/// residual σ; `signals` the method's reference and estimate signals (estimate on its own clock), used
+/// to locate change times. `forced`: the model to fit whatever the criterion says.
+pub fn choose_model(
+    profile: &OffsetProfile,
+    whole: (f64, Option<f64>),
+    signals: (&Signal, &Signal),
+    forced: Option<OffsetModel>,
+) -> ClockModel {
+    let w = profile.usable();
+    let rho = profile.redundancy();
+    let n_eff = w.len() as f64 / rho;
+    let whole_sigma = whole
+        .1
+        .map_or(SIGMA_FLOOR_S, |s| s * profile.sigma_scale)
+        .max(SIGMA_FLOOR_S);
+    let Some(c) = fit(&w, 0.0, false, rho) else {
+        return ClockModel::constant(
+            whole.0,
+            whole_sigma,
+            "constant: the offset profile has no usable window".into(),
+        );
+    };
+    let t_mid = 0.5 * (w[0].t + w[w.len() - 1].t);
+    let bic = |chi2: f64, k: f64| chi2 / rho + k * n_eff.max(1.0).ln();
+    let lin = fit(&w, t_mid, true, rho);
+    let min_len = (2.0 * rho).ceil() as usize;
+    let splits = segment(&w, min_len, rho, n_eff);
+    let pieces: Vec<Fit> = bounds(&splits, w.len())
+        .windows(2)
+        .filter_map(|b| fit(&w[b[0]..b[1]], 0.0, false, rho))
+        .collect();
+    let bic_c = bic(c.chi2, 1.0);
+    let bic_l = lin.map_or(f64::INFINITY, |l| bic(l.chi2, 2.0));
+    let bic_p = if splits.is_empty() {
+        f64::INFINITY
+    } else {
+        bic(
+            pieces.iter().map(|p| p.chi2).sum(),
+            (2 * splits.len() + 1) as f64,
+        )
+    };
+    let drift = lin.map(|l| (-l.b * 1e6, l.sigma_b * 1e6));
+    let enough = n_eff >= MIN_INDEPENDENT_WINDOWS;
+    let chosen = forced.unwrap_or_else(|| {
+        let best_other = bic_l.min(bic_p);
+        if enough && best_other <= bic_c - BIC_MARGIN {
+            if bic_p < bic_l {
+                OffsetModel::Piecewise
+            } else {
+                OffsetModel::Linear
+            }
+        } else {
+            OffsetModel::Constant
+        }
+    });
+    let constant_sigma = whole_sigma.max(c.sigma_a);
+    let mut model = ClockModel {
+        model: chosen,
+        offset_s: whole.0,
+        sigma_s: constant_sigma,
+        t_mid,
+        drift_ppm: drift.map(|d| d.0),
+        drift_sigma_ppm: drift.map(|d| d.1),
+        segments: Vec::new(),
+        bic: [bic_c, bic_l, bic_p],
+        reason: String::new(),
+    };
+    let why = if forced.is_some() {
+        "forced with --offset-model".to_string()
+    } else if !enough {
+        format!(
+            "{:.1} independent windows of {:.0} s are too few to refute it",
+            n_eff, profile.window_s
+        )
+    } else {
+        format!(
+            "BIC constant {bic_c:.1}, linear {bic_l:.1}, piecewise {bic_p:.1} over {} windows of {:.0} s (another model must be {BIC_MARGIN:.0} lower)",
+            w.len(),
+            profile.window_s
+        )
+    };
+    let fits = Fits {
+        constant: c,
+        linear: lin,
+        windows: &w,
+        splits: &splits,
+    };
+    fill(&mut model, &fits, profile, signals, &why);
+    model
+}
+
+/// The fits behind a model choice.
+struct Fits<'a> {
+    constant: Fit,
+    linear: Option<Fit>,
+    windows: &'a [ProfileWindow],
+    splits: &'a [usize],
+}
+
+/// Sets the chosen model's parameters and its one-sentence reason.
+fn fill(
+    model: &mut ClockModel,
+    f: &Fits<'_>,
+    profile: &OffsetProfile,
+    signals: (&Signal, &Signal),
+    why: &str,
+) {
+    match model.model {
+        OffsetModel::Constant => {
+            model.reason = format!(
+                "constant {:+.3} ± {:.3} s: {why}",
+                model.offset_s, model.sigma_s
+            );
+        }
+        OffsetModel::Linear => {
+            let l = f.linear.unwrap_or(f.constant);
+            model.offset_s = l.a;
+            model.sigma_s = l.sigma_a.max(SIGMA_FLOOR_S);
+            model.drift_ppm = Some(-l.b * 1e6);
+            model.reason = format!(
+                "linear drift {:+.0} ± {:.0} ppm: {why}",
+                -l.b * 1e6,
+                l.sigma_b * 1e6
+            );
+        }
+        OffsetModel::Piecewise => {
+            model.segments = piecewise_segments(f.windows, f.splits, profile, signals);
+            if let Some(s) = model
+                .segments
+                .iter()
+                .max_by(|a, b| (a.t_end - a.t_start).total_cmp(&(b.t_end - b.t_start)))
+            {
+                model.offset_s = s.offset_s;
+                model.sigma_s = s.sigma_s;
+            }
+            let steps: Vec<String> = model
+                .segments
+                .windows(2)
+                .map(|s| {
+                    format!(
+                        "{:+.3} → {:+.3} s at {:.0} s after the reference's start",
+                        s[0].offset_s, s[1].offset_s, s[1].t_start
+                    )
+                })
+                .collect();
+            model.reason = format!("piecewise, {}: {why}", steps.join(", "));
+        }
+    }
+}
+
+fn bounds(splits: &[usize], n: usize) -> Vec<usize> {
+    let mut b = vec![0];
+    b.extend(splits);
+    b.push(n);
+    b
+}
+
+/// The segments of a piecewise model: change times located on the signals between the windows on
+/// either side of each split, each segment's Δt the weighted mean of the windows wholly inside it.
+fn piecewise_segments(
+    w: &[ProfileWindow],
+    splits: &[usize],
+    profile: &OffsetProfile,
+    (r, e): (&Signal, &Signal),
+) -> Vec<ClockSegment> {
+    let half = 0.5 * profile.window_s;
+    let rho = profile.redundancy();
+    let b = bounds(splits, w.len());
+    let means: Vec<f64> = b
+        .windows(2)
+        .map(|x| fit(&w[x[0]..x[1]], 0.0, false, rho).map_or(f64::NAN, |f| f.a))
+        .collect();
+    let mut changes = Vec::new();
+    for (k, &i) in splits.iter().enumerate() {
+        let (lo, hi) = (w[i - 1].t - half, w[i].t + half);
+        changes.push(
+            locate_change((r, e), (means[k], means[k + 1]), (lo, hi))
+                .unwrap_or(0.5 * (w[i - 1].t + w[i].t)),
+        );
+    }
+    let mut edges = vec![w[0].t - half];
+    edges.extend(&changes);
+    edges.push(w[w.len() - 1].t + half);
+    edges
+        .windows(2)
+        .enumerate()
+        .map(|(k, x)| {
+            // Windows wholly inside the segment; those straddling a change mix both offsets.
+            let inside: Vec<ProfileWindow> = w
+                .iter()
+                .copied()
+                .filter(|p| p.t - half >= x[0] - 1e-9 && p.t + half <= x[1] + 1e-9)
+                .collect();
+            let f = fit(&inside, 0.0, false, rho).or_else(|| {
+                let lo = b[k];
+                let hi = b[k + 1];
+                fit(&w[lo..hi], 0.0, false, rho)
+            });
+            ClockSegment {
+                t_start: x[0],
+                t_end: x[1],
+                offset_s: f.map_or(means[k], |f| f.a),
+                sigma_s: f.map_or(SIGMA_FLOOR_S, |f| f.sigma_a.max(SIGMA_FLOOR_S)),
+            }
+        })
+        .collect()
+}
+
+/// The reference time τ in [lo, hi] at which the estimate's signal stops matching the reference at
+/// Δt₁ and starts matching it at Δt₂: the τ minimising Σ_{t<τ} (z_e − z_r(t + Δt₁))² +
+/// Σ_{t≥τ} (z_e − z_r(t + Δt₂))² over the estimate's samples (z: each signal standardised).
+pub fn locate_change(
+    (r, e): (&Signal, &Signal),
+    (d1, d2): (f64, f64),
+    (lo, hi): (f64, f64),
+) -> Option<f64> {
+    let stats = |v: &[f64]| {
+        let n = v.len() as f64;
+        let m = v.iter().sum::<f64>() / n;
+        let s = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n).sqrt();
+        (m, s.max(1e-12))
+    };
+    let ((mr, sr), (me, se)) = (stats(&r.1), stats(&e.1));
+    let at = |t: f64| -> Option<f64> {
+        let i = r.0.partition_point(|&x| x < t);
+        if i == 0 || i >= r.0.len() || r.0[i] - r.0[i - 1] > 1.0 {
+            return None;
+        }
+        let f = (t - r.0[i - 1]) / (r.0[i] - r.0[i - 1]);
+        Some((r.1[i - 1] + f * (r.1[i] - r.1[i - 1]) - mr) / sr)
+    };
+    // (reference time, cost before, cost after) per estimate sample in the stretch.
+    let mut pts: Vec<(f64, f64, f64)> = Vec::new();
+    for (&t, &v) in e.0.iter().zip(&e.1) {
+        let tr = t + d1;
+        if tr < lo || tr > hi {
+            continue;
+        }
+        let z = (v - me) / se;
+        if let (Some(a), Some(b)) = (at(t + d1), at(t + d2)) {
+            pts.push((tr, (z - a).powi(2), (z - b).powi(2)));
+        }
+    }
+    if pts.len() < 10 {
+        return None;
+    }
+    let total_after: f64 = pts.iter().map(|p| p.2).sum();
+    let (mut before, mut after) = (0.0, total_after);
+    let mut best = (after, pts[0].0);
+    for p in &pts {
+        before += p.1;
+        after -= p.2;
+        if before + after < best.0 {
+            best = (before + after, p.0);
+        }
+    }
+    Some(best.1)
+}
+
+/// The offset profile of `whole.method` around the whole mission's answer and the model chosen from
+/// it (`forced`: the model to fit). The signals are computed once; the windows correlate slices.
+#[allow(clippy::too_many_arguments)]
+pub fn clock_model(
+    ref_t: &[f64],
+    ref_p: &[nalgebra::Vector3<f64>],
+    est_t: &[f64],
+    est_p: &[nalgebra::Vector3<f64>],
+    params: &crate::align::time_offset::OffsetParams,
+    whole: &crate::align::time_offset::OffsetEstimate,
+    profile: &crate::align::offset_profile::ProfileParams,
+    forced: Option<OffsetModel>,
+) -> crate::error::Result<(OffsetProfile, ClockModel)> {
+    let (p, (r, e)) = crate::align::offset_profile::offset_profile(
+        whole.method,
+        ref_t,
+        ref_p,
+        est_t,
+        est_p,
+        params,
+        whole.offset_s,
+        profile,
+    )?;
+    let m = choose_model(&p, (whole.offset_s, whole.sigma_s), (&r, &e), forced);
+    Ok((p, m))
+}
