@@ -82,6 +82,15 @@ impl<R: Recording> Source for R {
     ) -> Result<Vec<crate::sources::tf_frames::FramePair>> {
         crate::sources::tf_frames::frame_pairs(self, progress)
     }
+
+    fn frame_pairs_checked(
+        &self,
+        progress: Progress<'_>,
+    ) -> Result<(Vec<crate::sources::tf_frames::FramePair>, Vec<Warning>)> {
+        let (pairs, truncated_at) = crate::sources::tf_frames::scan(self, progress)?;
+        let warnings = truncated_at.map(|o| self.truncation_warning(o));
+        Ok((pairs, warnings.into_iter().collect()))
+    }
 }
 
 /// The kind and encoding of a channel when trajdrift can decode it.

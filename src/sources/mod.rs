@@ -129,4 +129,12 @@ pub trait Source {
         let _ = progress;
         Ok(Vec::new())
     }
+    /// [`Source::frame_pairs`] by a pass over the whole recording, with the warnings that pass raised
+    /// (a recording cut short), so `topics` can say the recording is damaged.
+    fn frame_pairs_checked(
+        &self,
+        progress: Progress<'_>,
+    ) -> Result<(Vec<tf_frames::FramePair>, Vec<Warning>)> {
+        Ok((self.frame_pairs(progress)?, Vec::new()))
+    }
 }

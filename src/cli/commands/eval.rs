@@ -123,7 +123,7 @@ pub fn run(a: EvalArgs) -> Result<u8> {
     let (config, notes) = config_from_args(&a)?;
     if !a.quiet {
         for n in &notes {
-            eprintln!("note: {n}");
+            eprintln!("note: {}", trajdrift::report::escape::escape(n));
         }
     }
     if let (Some(out), Some(rec)) = (&a.annotate, &config.recording) {
@@ -162,10 +162,10 @@ pub fn run(a: EvalArgs) -> Result<u8> {
         write_output(path, &bytes)?;
     }
     if !a.quiet && !json_to_stdout {
-        print!("{}", table::render(&report));
+        crate::cli::emit(&table::render(&report))?;
     }
     for w in &report.warnings {
-        eprintln!("warning [{}]: {}", w.code, w.message);
+        crate::cli::warn(&w.code, &w.message);
     }
     Ok(if report.warnings.is_empty() {
         EXIT_OK

@@ -49,7 +49,7 @@ pub fn run(a: ExportArgs) -> Result<u8> {
     }
     write_output(&a.out, &bytes)?;
     for w in &extraction.warnings {
-        eprintln!("warning [{}]: {}", w.code, w.message);
+        crate::cli::warn(&w.code, &w.message);
     }
     Ok(EXIT_OK)
 }

@@ -219,7 +219,9 @@ pub(crate) fn read_magic(file: &mut std::fs::File, path: &Path) -> Result<[u8; 8
     if got < magic.len() || magic[..] != *mcap::MAGIC {
         return Err(Error::NotMcap {
             path: path.to_path_buf(),
-            detail: if got < magic.len() {
+            detail: if got == 0 {
+                "the file is empty (0 bytes)".into()
+            } else if got < magic.len() {
                 format!("{got} bytes, shorter than the 8-byte magic")
             } else {
                 "the file does not start with the MCAP magic".into()
