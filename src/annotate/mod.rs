@@ -14,12 +14,14 @@ pub mod metadata;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+
 use crate::align::curvature::{curvature_signature, CurvatureSample};
 use crate::decode::message_kind;
 use crate::error::{Error, Result};
 use crate::eval::config::{EvalConfig, TrajectoryInput};
 use crate::eval::inputs::Inputs;
 use crate::report::json::Report;
+use crate::report::output::{AtomicFile, OutputGuard};
 use crate::sources::Progress;
 use crate::trajectory::Trajectory;
 use channels::{
@@ -38,24 +40,10 @@ pub struct AnnotateOutcome {
     pub counts: Counts,
 }
 
-/// Checks that `out` may be written for `input`: not the input itself, and not existing unless `force`.
+/// Checks that `out` may be written for `input`: not the input itself (by path, symlink or inode:
+/// [`OutputGuard`]), and not existing unless `force`.
 pub fn check_output(input: &Path, out: &Path, force: bool) -> Result<()> {
-    let canon = |p: &Path| -> Option<PathBuf> {
-        if let Ok(c) = p.canonicalize() {
-            return Some(c);
-        }
-        let parent = match p.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        Some(parent.canonicalize().ok()?.join(p.file_name()?))
-    };
-    if canon(input).is_some_and(|i| canon(out).is_some_and(|o| i == o)) {
-        return Err(Error::InvalidArgument(format!(
-            "{}: --annotate would overwrite the input recording; choose another output file",
-            out.display()
-        )));
-    }
+    OutputGuard::new([input]).check("--annotate", out)?;
     if out.exists() && !force {
         return Err(Error::InvalidArgument(format!(
             "{}: exists; pass --force to replace it",
@@ -91,45 +79,27 @@ pub fn annotate(
         path: out.to_path_buf(),
         detail: e.to_string(),
     };
-    let dir = match out.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = out
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out.mcap".into());
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| -> Result<CopyOutcome> {
-        let file = std::fs::File::create(&tmp).map_err(out_err)?;
-        let options = mcap::WriteOptions::new()
-            .compression(info.output_compression())
-            .library(concat!("trajdrift ", env!("CARGO_PKG_VERSION")));
-        let (outcome, mut sink) = copy_with(
-            recording,
-            std::io::BufWriter::new(file),
-            out,
-            options,
-            &mut annotator,
-            progress,
-        )?;
-        sink.flush().map_err(out_err)?;
-        sink.get_ref().sync_all().map_err(out_err)?;
-        drop(sink);
-        std::fs::rename(&tmp, out).map_err(out_err)?;
-        Ok(outcome)
-    })();
-    match result {
-        Ok(copy) => Ok(AnnotateOutcome {
-            path: out.to_path_buf(),
-            copy,
-            counts: annotator.counts(),
-        }),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
+    let mut target = AtomicFile::create(out)?;
+    let file = target.file().try_clone().map_err(out_err)?;
+    let options = mcap::WriteOptions::new()
+        .compression(info.output_compression())
+        .library(concat!("trajdrift ", env!("CARGO_PKG_VERSION")));
+    let (copy, mut sink) = copy_with(
+        recording,
+        std::io::BufWriter::new(file),
+        out,
+        options,
+        &mut annotator,
+        progress,
+    )?;
+    sink.flush().map_err(out_err)?;
+    drop(sink);
+    target.commit()?;
+    Ok(AnnotateOutcome {
+        path: out.to_path_buf(),
+        copy,
+        counts: annotator.counts(),
+    })
 }
 
 fn curvature_messages(traj: &Trajectory, config: &EvalConfig) -> Vec<(u64, CurvatureMessage)> {

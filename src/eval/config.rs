@@ -359,6 +359,42 @@ impl EvalConfig {
             .map(|(_, l)| l)
     }
 
+    /// Every file the evaluation reads: the recording, the text trajectories, KITTI times. Outputs are
+    /// checked against them ([`crate::report::output::OutputGuard`]).
+    pub fn input_paths(&self) -> Vec<PathBuf> {
+        let files = std::iter::once(&self.reference)
+            .chain(&self.estimates)
+            .filter_map(|i| match &i.input {
+                TrajectoryInput::TumFile(p) => Some(p.clone()),
+                TrajectoryInput::Topic(_) => None,
+            });
+        self.recording
+            .iter()
+            .cloned()
+            .chain(files)
+            .chain(self.text.kitti_times.iter().cloned())
+            .collect()
+    }
+
+    /// The guard every output of this evaluation is checked with.
+    pub fn output_guard(&self) -> crate::report::output::OutputGuard {
+        crate::report::output::OutputGuard::new(self.input_paths())
+    }
+
+    /// Refuses the outputs the library writes itself (`--export-aligned`, one file per estimate) when
+    /// one would overwrite an input.
+    pub fn check_outputs(&self) -> Result<()> {
+        let Some(file) = &self.export_aligned else {
+            return Ok(());
+        };
+        let guard = self.output_guard();
+        for e in &self.estimates {
+            let path = super::export::aligned_path(file, &e.name, self.estimates.len());
+            guard.check("--export-aligned", &path)?;
+        }
+        Ok(())
+    }
+
     /// Checks every value; the error says which flag is wrong and what it accepts.
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::InvalidArgument(m));

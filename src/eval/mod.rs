@@ -40,6 +40,7 @@ pub fn evaluate_with_inputs(
     progress: Progress<'_>,
 ) -> Result<(Report, Inputs)> {
     config.validate()?;
+    config.check_outputs()?;
     let mut inputs = load(config, progress)?;
     let levers = extrinsics::apply_levers(&inputs.reference, &mut inputs.estimates)?;
     let reference = &mut inputs.reference;

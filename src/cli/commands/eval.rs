@@ -8,7 +8,7 @@ use trajdrift::eval::config::{EvalConfig, LeverSpec, NamedInput, Platform};
 use trajdrift::eval::evaluate_with_inputs;
 use trajdrift::eval::preset::Preset;
 use trajdrift::metrics::lever::LeverCorrection;
-use trajdrift::report::{output::write_output, table};
+use trajdrift::report::table;
 use trajdrift::sources::StampSource;
 
 use crate::cli::args::{
@@ -126,6 +126,10 @@ pub fn run(a: EvalArgs) -> Result<u8> {
             eprintln!("note: {}", trajdrift::report::escape::escape(n));
         }
     }
+    let guard = config.output_guard();
+    if let Some(out) = &a.json {
+        guard.check("--json", out)?;
+    }
     if let (Some(out), Some(rec)) = (&a.annotate, &config.recording) {
         // Refuse before the evaluation pass rather than after it.
         trajdrift::annotate::check_output(rec, out, a.force)?;
@@ -159,7 +163,7 @@ pub fn run(a: EvalArgs) -> Result<u8> {
     if let Some(path) = &a.json {
         let mut bytes = serde_json::to_vec_pretty(&report)?;
         bytes.push(b'\n');
-        write_output(path, &bytes)?;
+        guard.write("--json", path, &bytes)?;
     }
     if !a.quiet && !json_to_stdout {
         crate::cli::emit(&table::render(&report))?;

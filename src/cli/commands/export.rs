@@ -3,7 +3,7 @@
 
 use anyhow::{anyhow, Result};
 
-use trajdrift::report::output::write_output;
+use trajdrift::report::output::OutputGuard;
 use trajdrift::sources::mapped_csv::write_csv;
 use trajdrift::sources::open::is_recording;
 use trajdrift::sources::text::TextSource;
@@ -15,6 +15,9 @@ use crate::cli::EXIT_OK;
 
 /// Runs the command; returns the exit code.
 pub fn run(a: ExportArgs) -> Result<u8> {
+    // Refused before the pass, and again when written.
+    OutputGuard::new(std::iter::once(a.recording.clone()).chain(a.text.kitti_times.clone()))
+        .check("OUT", &a.out)?;
     let (source, topic): (Box<dyn Source>, String) = if is_recording(&a.recording) {
         let topic = a.topic.clone().ok_or_else(|| {
             anyhow!(trajdrift::Error::InvalidArgument(format!(
@@ -47,7 +50,8 @@ pub fn run(a: ExportArgs) -> Result<u8> {
         ExportFormatArg::Tum => write_tum(&mut bytes, traj)?,
         ExportFormatArg::Csv => write_csv(&mut bytes, traj)?,
     }
-    write_output(&a.out, &bytes)?;
+    let guard = OutputGuard::new(std::iter::once(a.recording.clone()).chain(a.text.kitti_times.clone()));
+    guard.write("OUT", &a.out, &bytes)?;
     for w in &extraction.warnings {
         crate::cli::warn(&w.code, &w.message);
     }
