@@ -26,7 +26,7 @@ pub enum Error {
     CorruptMcap { path: PathBuf, detail: String },
 
     /// A requested topic is not in the recording.
-    #[error("{path}: topic {topic} not found; topics present: {}", .available.join(", "))]
+    #[error("{path}: topic {topic} not found; {}", crate::error::present(.available))]
     TopicNotFound {
         path: PathBuf,
         topic: String,
@@ -53,7 +53,7 @@ pub enum Error {
     },
 
     /// A message could not be decoded.
-    #[error("{path}: topic {topic}: cannot decode message {index}: {detail}; check that the channel's schema matches its messages")]
+    #[error("{path}: topic {topic}: cannot decode message {index}: {detail}; the message is damaged, or the channel's schema does not match its messages")]
     Decode {
         path: PathBuf,
         topic: String,
@@ -201,6 +201,16 @@ impl ExitStatus {
         } else {
             ExitStatus::Ok
         }
+    }
+}
+
+/// The topics a recording holds, for "not found" messages; says when there is none.
+pub fn present(available: &[String]) -> String {
+    if available.is_empty() {
+        "the recording holds no topic at all (it is empty or damaged; run `trajdrift topics` on it)"
+            .into()
+    } else {
+        format!("topics present: {}", available.join(", "))
     }
 }
 

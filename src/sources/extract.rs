@@ -330,7 +330,18 @@ pub fn extract(
             Ok(())
         },
     )?;
-    check_requested(path, topics_plain, &outcome.channels)?;
+    check_requested(path, topics_plain, &outcome.channels).map_err(|e| {
+        match (e, outcome.truncated_at) {
+            (Error::TopicNotFound { topic, .. }, Some(offset)) => Error::Damaged {
+                path: path.to_path_buf(),
+                offset,
+                detail: format!(
+                    "the recording is cut short or damaged there, and topic {topic} was not found before"
+                ),
+            },
+            (e, _) => e,
+        }
+    })?;
     check_tf_channels(path, &chains, &outcome.channels)?;
     let tree = tf.map(TfCollector::finish).unwrap_or_default();
     let mut chain_topics = Vec::with_capacity(chains.len());
