@@ -60,7 +60,7 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
         .as_deref()
         .map(|s| parse_triple("--origin", s))
         .transpose()
-        .map_err(|e| anyhow!(e))?;
+        .map_err(trajdrift::Error::InvalidArgument)?;
     c.platform = match a.platform {
         PlatformArg::Legged => Platform::Legged,
         PlatformArg::Wheeled => Platform::Wheeled,
