@@ -27,6 +27,9 @@ pub fn render(report: &Report) -> String {
         p.dt_max_s,
         p.lever_correction
     );
+    if let Some(rows) = report.reference.rows.describe() {
+        let _ = writeln!(s, "  reference rows: {rows}");
+    }
     for e in &report.estimates {
         let o = &e.time_offset;
         let _ = writeln!(
@@ -34,6 +37,9 @@ pub fn render(report: &Report) -> String {
             "\nestimate {} ({}, {}, {} samples)",
             escape(&e.name), escape(&e.topic), escape(&e.type_name), e.samples
         );
+        if let Some(rows) = e.rows.describe() {
+            let _ = writeln!(s, "  rows: {rows}");
+        }
         let _ = writeln!(
             s,
             "  time offset  {:+.4} s  applied {:+.4} s  method {}  ρ {}  confidence {}  status {}",

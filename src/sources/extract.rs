@@ -18,6 +18,7 @@ use crate::sources::{
     ExtractOptions, ExtractedTopic, Extraction, Progress, Source, StampSource, StaticTransform,
     TopicInfo, Warning,
 };
+use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
 /// Asked once per channel whether its messages are wanted.
@@ -363,6 +364,11 @@ pub fn extract(
             messages: c.edges_read,
             invalid_dropped: c.composed.outside_span,
             duplicate_stamps: 0,
+            rows: RowAudit {
+                read: c.edges_read,
+                outside_tf_span: c.composed.outside_span,
+                ..RowAudit::default()
+            },
             geodetic_origin: None,
         });
     }
@@ -388,9 +394,15 @@ pub fn extract(
             .ok_or_else(|| Error::InvalidArgument(format!("{topic}: no readable channel")))
         })
         .collect::<Result<_>>()?;
-    let duplicates: Vec<u64> = accumulators
+    // Invalid samples (NO_FIX, NaN) never reach the trajectory; `clean` counts the rest.
+    let audits: Vec<RowAudit> = accumulators
         .iter_mut()
-        .map(|a| a.trajectory.sort_dedup() as u64)
+        .map(|a| {
+            let mut audit = a.trajectory.clean();
+            audit.read = a.messages;
+            audit.not_finite += a.invalid_dropped;
+            audit
+        })
         .collect();
 
     // The ENU origin: given, or the first valid fix (by stamp) of the first geodetic topic
@@ -405,9 +417,9 @@ pub fn extract(
 
     let mut done: Vec<Option<ExtractedTopic>> = accumulators
         .into_iter()
-        .zip(duplicates)
+        .zip(audits)
         .zip(&unique)
-        .map(|((mut acc, duplicate_stamps), topic)| {
+        .map(|((mut acc, rows), topic)| {
             let mut geodetic_origin = None;
             if acc.kind.is_geodetic() {
                 // `origin` is Some whenever a geodetic topic has a sample.
@@ -423,8 +435,9 @@ pub fn extract(
                 type_name: acc.kind.type_name().to_string(),
                 trajectory: acc.trajectory,
                 messages: acc.messages,
-                invalid_dropped: acc.invalid_dropped,
-                duplicate_stamps,
+                invalid_dropped: rows.not_finite + rows.out_of_range,
+                duplicate_stamps: rows.duplicate_stamp,
+                rows,
                 geodetic_origin,
             })
         })

@@ -12,6 +12,7 @@ use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
 use crate::error::{Error, Result};
 use crate::sources::tum::parse_stamp_ns;
+use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
 /// Frame period assumed when no times file is given (KITTI records at 10 Hz), nanoseconds.
@@ -21,6 +22,11 @@ const HINT: &str = "expected KITTI rows of 12 numbers (a 3x4 pose matrix, row-ma
 
 /// Reads a KITTI pose file, stamped by `times` (a KITTI `times.txt`) when given, else `i · 0.1 s`.
 pub fn read_kitti(path: &Path, times: Option<&Path>) -> Result<Trajectory> {
+    read_kitti_audited(path, times).map(|(t, _)| t)
+}
+
+/// [`read_kitti`], and what became of every row ([`Trajectory::clean`]).
+pub fn read_kitti_audited(path: &Path, times: Option<&Path>) -> Result<(Trajectory, RowAudit)> {
     let stamps = times.map(read_times).transpose()?;
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut traj = Trajectory::new(true);
@@ -61,6 +67,8 @@ pub fn read_kitti(path: &Path, times: Option<&Path>) -> Result<Trajectory> {
         let m = Matrix3::new(v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10]);
         let p = Vector3::new(v[3], v[7], v[11]);
         if !p.iter().all(|x| x.is_finite()) || !m.iter().all(|x| x.is_finite()) {
+            // Kept as a NaN row so that `clean` counts it as not finite.
+            traj.push(stamp, Vector3::repeat(f64::NAN), None);
             continue;
         }
         // The matrices are rounded to 7 digits: project onto the nearest rotation.
@@ -77,8 +85,8 @@ pub fn read_kitti(path: &Path, times: Option<&Path>) -> Result<Trajectory> {
             });
         }
     }
-    traj.sort_dedup();
-    Ok(traj)
+    let audit = traj.clean();
+    Ok((traj, audit))
 }
 
 /// Reads a KITTI `times.txt`: one time in seconds a row.

@@ -85,6 +85,8 @@ pub struct ExtractedTopic {
     pub invalid_dropped: u64,
     /// Samples dropped because their stamp repeated the previous one.
     pub duplicate_stamps: u64,
+    /// Every row read, dropped per reason, stamps going back ([`crate::trajectory::rows`]).
+    pub rows: crate::trajectory::rows::RowAudit,
     /// The ENU origin used for a geodetic topic.
     pub geodetic_origin: Option<[f64; 3]>,
 }

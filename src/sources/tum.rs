@@ -9,11 +9,24 @@ use std::path::Path;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use crate::error::{Error, Result};
+use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
 /// Reads a TUM file. Lines with 4 values (`t x y z`) give a position-only trajectory; 8 values add the
 /// orientation. Stamps are parsed as seconds and rounded to the nanosecond.
 pub fn read_tum(path: &Path) -> Result<Trajectory> {
+    read_tum_audited(path).map(|(t, _)| t)
+}
+
+/// [`read_tum`], and what became of every row ([`Trajectory::clean`]).
+pub fn read_tum_audited(path: &Path) -> Result<(Trajectory, RowAudit)> {
+    let mut t = read_tum_rows(path)?;
+    let audit = t.clean();
+    Ok((t, audit))
+}
+
+/// Every row of a TUM file in file order, unsorted, rows not finite included.
+fn read_tum_rows(path: &Path) -> Result<Trajectory> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut traj: Option<Trajectory> = None;
     for (i, line) in BufReader::new(file).lines().enumerate() {
@@ -41,17 +54,12 @@ pub fn read_tum(path: &Path) -> Result<Trajectory> {
         let t = traj.get_or_insert_with(|| Trajectory::new(vals.len() == 8));
         let stamp_ns = parse_stamp_ns(line).ok_or_else(|| bad("bad timestamp".into()))?;
         let p = Vector3::new(vals[1], vals[2], vals[3]);
-        if !p.iter().all(|v| v.is_finite()) {
-            continue;
-        }
         let q = (vals.len() == 8).then(|| {
             UnitQuaternion::from_quaternion(Quaternion::new(vals[7], vals[4], vals[5], vals[6]))
         });
         t.push(stamp_ns, p, q);
     }
-    let mut t = traj.unwrap_or_default();
-    t.sort_dedup();
-    Ok(t)
+    Ok(traj.unwrap_or_default())
 }
 
 /// Parses the first field of a TUM line as integer nanoseconds without going through `f64`, so that
