@@ -95,7 +95,7 @@ pub enum LeverCorrectionArg {
 #[derive(Debug, Args)]
 #[command(allow_negative_numbers = true)]
 pub struct EvalArgs {
-    /// The recording (.mcap). Optional when both sides are text files.
+    /// The recording (MCAP, ROS 1 bag or rosbag2 folder). Optional when both sides are text files.
     pub recording: Option<PathBuf>,
     /// Reference topic.
     #[arg(long, value_name = "TOPIC", required_unless_present_any = ["reference_file", "preset"])]
@@ -241,7 +241,7 @@ pub struct TextArgs {
 
 #[derive(Debug, Args)]
 pub struct TopicsArgs {
-    /// The recording (.mcap).
+    /// The recording (MCAP, ROS 1 bag or rosbag2 folder).
     pub recording: PathBuf,
     /// Write the list as JSON to FILE (`-` = stdout).
     #[arg(long, value_name = "FILE")]

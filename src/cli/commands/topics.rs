@@ -20,7 +20,7 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
     // TF frames are not in any index: one more pass, over the TF channels only; it reads every record,
     // so it also finds where a recording is cut short.
     let (pairs, mut warnings) = source.frame_pairs_checked(&|_| {})?;
-    if topics.is_empty() {
+    if topics.is_empty() && warnings.is_empty() {
         warnings.push(Warning {
             code: "empty_recording".into(),
             message: format!(
