@@ -455,3 +455,155 @@ fn help_texts_name_every_recording_format() {
         assert!(out.contains("ROS 1 bag"), "{cmd}: {out}");
     }
 }
+
+// 8 (in `cargo test`). Seeded mutation test: 500 mutants of an MCAP and 500 of a bag, read in a child
+// process of this test binary under a 1 GB address-space limit: no panic, no hang, no abort.
+
+/// Mutants per recording.
+const MUTANTS: usize = 500;
+/// The whole child (500 mutants) must end within this.
+const CHILD_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(120);
+
+/// One mutant of `base`: a few byte flips, a hostile length written over a u32/u64, a cut, or a
+/// slice repeated, chosen by `rng`.
+fn mutate(base: &[u8], rng: &mut rand_chacha::ChaCha8Rng) -> Vec<u8> {
+    use rand::Rng;
+    let mut d = base.to_vec();
+    for _ in 0..rng.random_range(1..=3) {
+        let n = d.len().max(1);
+        match rng.random_range(0..5) {
+            0 => {
+                for _ in 0..rng.random_range(1..=8) {
+                    let i = rng.random_range(0..n);
+                    if let Some(b) = d.get_mut(i) {
+                        *b ^= 1 << rng.random_range(0..8);
+                    }
+                }
+            }
+            1 | 2 => {
+                let hostile: [u64; 6] = [u64::MAX, u32::MAX as u64, 1 << 31, 1 << 40, 0, n as u64];
+                let v = hostile[rng.random_range(0..hostile.len())];
+                let width = if rng.random_bool(0.5) { 4 } else { 8 };
+                let i = rng.random_range(0..n);
+                let bytes = v.to_le_bytes();
+                for (k, b) in bytes[..width].iter().enumerate() {
+                    if let Some(x) = d.get_mut(i + k) {
+                        *x = *b;
+                    }
+                }
+            }
+            3 => d.truncate(rng.random_range(0..n)),
+            _ => {
+                let a = rng.random_range(0..n);
+                let b = (a + rng.random_range(1..=64)).min(d.len());
+                let slice = d.get(a..b).map(<[u8]>::to_vec).unwrap_or_default();
+                let at = rng.random_range(0..=d.len());
+                d.splice(at..at, slice);
+            }
+        }
+    }
+    d
+}
+
+/// Everything a user can ask of a recording; errors are fine, panics are not.
+fn exercise(path: &Path) {
+    use trajdrift::sources::{ExtractOptions, Source};
+    let Ok(source) = trajdrift::sources::open(path) else {
+        return;
+    };
+    let source: &dyn Source = source.as_ref();
+    let Ok(topics) = source.topics() else {
+        return;
+    };
+    let _ = source.frame_pairs_checked(&|_| {});
+    let readable: Vec<String> = topics
+        .iter()
+        .filter(|t| t.readable)
+        .map(|t| t.topic.clone())
+        .collect();
+    let _ = source.extract(&readable, &ExtractOptions::default(), &|_| {});
+}
+
+/// The child's work, when `HOSTILE_MUTANTS` names a recording kind: read every mutant, catching
+/// panics, and print `mutants: N, panics: P` (the parent checks it). A no-op otherwise.
+#[test]
+fn mutation_child() {
+    use rand::SeedableRng;
+    let Ok(kind) = std::env::var("HOSTILE_MUTANTS") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let base_path = dir.path().join(format!("base.{kind}"));
+    match kind.as_str() {
+        "mcap" => small_mcap(&base_path, 20),
+        _ => small_bag(&base_path, BagCompression::Lz4, 10),
+    }
+    let base = std::fs::read(&base_path).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+    std::panic::set_hook(Box::new(|_| {}));
+    let mut panics = Vec::new();
+    for i in 0..MUTANTS {
+        let path = dir.path().join(format!("m{i}.{kind}"));
+        std::fs::write(&path, mutate(&base, &mut rng)).unwrap();
+        if std::panic::catch_unwind(|| exercise(&path)).is_err() {
+            panics.push(i);
+        }
+        std::fs::remove_file(&path).unwrap();
+    }
+    println!("mutants: {MUTANTS}, panics: {panics:?}");
+}
+
+fn run_mutants(kind: &str) {
+    use std::os::unix::process::CommandExt;
+    let exe = std::env::current_exe().unwrap();
+    let mut c = Command::new(exe);
+    c.args(["--exact", "mutation_child", "--nocapture", "--test-threads", "1"])
+        .env("HOSTILE_MUTANTS", kind)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped());
+    let limit: u64 = 1 << 30;
+    unsafe {
+        c.pre_exec(move || {
+            let lim = libc::rlimit {
+                rlim_cur: limit as libc::rlim_t,
+                rlim_max: limit as libc::rlim_t,
+            };
+            if libc::setrlimit(libc::RLIMIT_AS, &lim) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let start = std::time::Instant::now();
+    let mut child = c.spawn().unwrap();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > CHILD_TIMEOUT {
+            child.kill().unwrap();
+            panic!("{kind}: {MUTANTS} mutants did not finish within {CHILD_TIMEOUT:?} (a hang)");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let o = child.wait_with_output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{kind}: the child died ({:?}; an allocation over 1 GB aborts): {out} {}",
+        o.status,
+        stderr(&o)
+    );
+    assert!(
+        out.contains(&format!("mutants: {MUTANTS}, panics: []")),
+        "{kind}: {out}"
+    );
+    eprintln!("{kind}: {MUTANTS} mutants in {:.1} s", start.elapsed().as_secs_f64());
+}
+
+#[test]
+fn mutated_mcaps_never_panic_hang_or_exceed_1gb() {
+    run_mutants("mcap");
+}
+
+#[test]
+fn mutated_bags_never_panic_hang_or_exceed_1gb() {
+    run_mutants("bag");
+}

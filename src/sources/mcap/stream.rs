@@ -11,6 +11,7 @@ use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
 
+use super::lengths::check_record;
 use mcap::records::{op, Record};
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use mcap::McapError;
@@ -150,6 +151,9 @@ where
                     on_message(&out.channels[index], &message)?;
                 }
                 op::SCHEMA => {
+                    check_record(opcode, data).map_err(|d| {
+                        corrupt(format!("schema record before byte {}: {d}", out.bytes_read))
+                    })?;
                     if let Ok(Record::Schema { header, .. }) = mcap::parse_record(opcode, data) {
                         schemas
                             .entry(header.id)
@@ -157,6 +161,9 @@ where
                     }
                 }
                 op::CHANNEL => {
+                    check_record(opcode, data).map_err(|d| {
+                        corrupt(format!("channel record before byte {}: {d}", out.bytes_read))
+                    })?;
                     let Record::Channel(c) = mcap::parse_record(opcode, data)
                         .map_err(|e| corrupt(format!("channel record: {e}")))?
                     else {
