@@ -607,3 +607,25 @@ fn mutated_mcaps_never_panic_hang_or_exceed_1gb() {
 fn mutated_bags_never_panic_hang_or_exceed_1gb() {
     run_mutants("bag");
 }
+
+/// The record-length checks accept every valid file: the summary of each of the 416 MCAP
+/// conformance variants (every record type, with and without summaries, statistics, indexes).
+#[test]
+fn length_checks_accept_every_conformance_file() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let root = shared.join("conformance/data");
+    let mut n = 0;
+    for d in std::fs::read_dir(&root).unwrap() {
+        for e in std::fs::read_dir(d.unwrap().path()).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_some_and(|e| e == "mcap") {
+                trajdrift::sources::mcap::lengths::check_summary(&p, 64 << 20)
+                    .unwrap_or_else(|d| panic!("{}: {d}", p.display()));
+                n += 1;
+            }
+        }
+    }
+    assert_eq!(n, 416);
+}
