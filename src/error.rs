@@ -15,7 +15,10 @@ pub enum Error {
     /// The file could not be opened or read. The cause is said once (it is not also the error's
     /// `source`, so a printed chain does not repeat it), followed by what to do.
     #[error("{path}: cannot read: {}; {}", crate::error::io_cause(.cause), crate::error::io_hint(.cause))]
-    Io { path: PathBuf, cause: std::io::Error },
+    Io {
+        path: PathBuf,
+        cause: std::io::Error,
+    },
 
     /// The file is not an MCAP recording (bad magic, or no record could be parsed).
     #[error("{path}: not an MCAP recording ({detail}); pass a .mcap file, or a TUM file with --reference-file/--estimate-file")]

@@ -39,7 +39,11 @@ fn write_fuzz_seeds() {
         d
     };
     small_mcap(&dir("mcap_source").join("small.mcap"), 20);
-    small_bag(&dir("bag_reader").join("none.bag"), BagCompression::None, 10);
+    small_bag(
+        &dir("bag_reader").join("none.bag"),
+        BagCompression::None,
+        10,
+    );
     small_bag(&dir("bag_reader").join("lz4.bag"), BagCompression::Lz4, 10);
     small_bag(&dir("bag_reader").join("bz2.bag"), BagCompression::Bz2, 10);
     use trajdrift::decode::cdr::encode_le;
@@ -85,11 +89,7 @@ fn write_fuzz_seeds() {
         b"\x00# t x y z qx qy qz qw\n1.0 0 0 0 0 0 0 1\n1.1 0.1 0 0 0 0 0 1\n1.1 0.1 0 0 0 0 0 1\n",
     )
     .unwrap();
-    std::fs::write(
-        text.join("csv"),
-        b"\x01t,x,y,z\n1.0,0,0,0\n1.1,0.1,0,0\n",
-    )
-    .unwrap();
+    std::fs::write(text.join("csv"), b"\x01t,x,y,z\n1.0,0,0,0\n1.1,0.1,0,0\n").unwrap();
     std::fs::write(
         text.join("kitti"),
         b"\x021 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0.1 0 1 0 0 0 0 1 0\n",
@@ -114,8 +114,17 @@ impl Fixture {
         small_bag(&dir.path().join("in.bag"), BagCompression::Lz4, 40);
         let f = Fixture { dir };
         // Export the MCAP's trajectories as TUM text for the text-only cases.
-        for (topic, name) in [("/reference/position", "ref.tum"), ("/estimate/odom", "est.tum")] {
-            let o = run(&["export", s(&f.p("in.mcap")), "--topic", topic, s(&f.p(name))]);
+        for (topic, name) in [
+            ("/reference/position", "ref.tum"),
+            ("/estimate/odom", "est.tum"),
+        ] {
+            let o = run(&[
+                "export",
+                s(&f.p("in.mcap")),
+                "--topic",
+                topic,
+                s(&f.p(name)),
+            ]);
             assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
         }
         f
@@ -182,7 +191,10 @@ fn outputs_are_atomic_and_stale_temp_files_are_removed() {
     // A temp file a killed run left (PIDs above the kernel's maximum never run).
     let stale = f.p(".out.json.4194305.tmp");
     std::fs::write(&stale, "half a report").unwrap();
-    let o = run(&eval_args(s(&f.p("in.mcap")), &["--json", s(&f.p("out.json"))]));
+    let o = run(&eval_args(
+        s(&f.p("in.mcap")),
+        &["--json", s(&f.p("out.json"))],
+    ));
     assert!(matches!(o.status.code(), Some(0 | 3)), "{}", stderr(&o));
     assert!(!stale.exists(), "stale temp file left");
     let names: Vec<String> = std::fs::read_dir(f.dir.path())
@@ -219,7 +231,11 @@ fn parameter_values_out_of_range_are_usage_errors() {
         if !says.starts_with("--origin takes") {
             assert!(e.contains("expected a finite value in"), "{extra:?}: {e}");
         }
-        assert!(start.elapsed().as_secs() < 10, "{extra:?} took {:?}", start.elapsed());
+        assert!(
+            start.elapsed().as_secs() < 10,
+            "{extra:?} took {:?}",
+            start.elapsed()
+        );
     }
 }
 
@@ -228,7 +244,8 @@ fn parameter_values_out_of_range_are_usage_errors() {
 fn huge_lengths_in_a_bag_or_mcap_stay_under_one_gigabyte() {
     let f = Fixture::new();
     let bag = std::fs::read(f.p("in.bag")).unwrap();
-    let u32_at = |d: &[u8], at: usize| u32::from_le_bytes(d[at..at + 4].try_into().unwrap()) as usize;
+    let u32_at =
+        |d: &[u8], at: usize| u32::from_le_bytes(d[at..at + 4].try_into().unwrap()) as usize;
     // The bag header record: its header length at 13, its data length after the header.
     let data_len_at = 13 + 4 + u32_at(&bag, 13);
     let next = data_len_at + 4 + u32_at(&bag, data_len_at);
@@ -249,11 +266,21 @@ fn huge_lengths_in_a_bag_or_mcap_stay_under_one_gigabyte() {
         std::fs::write(&path, data).unwrap();
         for args in [
             vec!["topics", s(&path)],
-            vec!["export", s(&path), "--topic", "/estimate/odom", s(&f.p("o.tum"))],
+            vec![
+                "export",
+                s(&path),
+                "--topic",
+                "/estimate/odom",
+                s(&f.p("o.tum")),
+            ],
         ] {
             let o = limited(&args, 1 << 30);
             let e = stderr(&o);
-            assert!(matches!(o.status.code(), Some(1 | 3)), "{args:?}: {:?} {e}", o.status);
+            assert!(
+                matches!(o.status.code(), Some(1 | 3)),
+                "{args:?}: {:?} {e}",
+                o.status
+            );
             assert!(
                 e.contains("damaged") || e.contains("cut short") || e.contains("cannot read"),
                 "{args:?}: {e}"
@@ -294,13 +321,20 @@ fn topics_names_truncation_damage_and_emptiness() {
         let o = run(&["topics", s(&cut)]);
         let e = stderr(&o);
         assert_eq!(o.status.code(), Some(3), "{name}: {e}");
-        assert!(e.contains("warning [truncated_recording]") && e.contains("cut short at byte"), "{e}");
+        assert!(
+            e.contains("warning [truncated_recording]") && e.contains("cut short at byte"),
+            "{e}"
+        );
     }
     let empty = f.p("empty.mcap");
     std::fs::write(&empty, b"").unwrap();
     let o = run(&["topics", s(&empty)]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("the file is empty (0 bytes)"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("the file is empty (0 bytes)"),
+        "{}",
+        stderr(&o)
+    );
     let magic = f.p("magic.mcap");
     std::fs::write(&magic, b"\x89MCAP0\r\n").unwrap();
     let o = run(&["topics", s(&magic)]);
@@ -308,13 +342,21 @@ fn topics_names_truncation_damage_and_emptiness() {
     assert!(stderr(&o).contains("cut short at byte 8"), "{}", stderr(&o));
     // A well-formed MCAP without a channel is empty.
     let none = f.p("none.mcap");
-    let w = mcap::Writer::new(std::io::BufWriter::new(std::fs::File::create(&none).unwrap()));
+    let w = mcap::Writer::new(std::io::BufWriter::new(
+        std::fs::File::create(&none).unwrap(),
+    ));
     w.unwrap().finish().unwrap();
     let o = run(&["topics", s(&none)]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     assert!(stderr(&o).contains("empty recording"), "{}", stderr(&o));
     // A topic missing before the cut is named as damage at its byte offset.
-    let o = run(&["export", s(&magic), "--topic", "/estimate/odom", s(&f.p("o.tum"))]);
+    let o = run(&[
+        "export",
+        s(&magic),
+        "--topic",
+        "/estimate/odom",
+        s(&f.p("o.tum")),
+    ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("damaged at byte 8"), "{}", stderr(&o));
 }
@@ -347,8 +389,15 @@ fn a_closed_stdout_ends_quietly() {
         drop(child.stdout.take()); // the reader went away, like `| head -0`
         let o = child.wait_with_output().unwrap();
         let e = stderr(&o);
-        assert!(matches!(o.status.code(), Some(0 | 3)), "{args:?}: {:?} {e}", o.status);
-        assert!(!e.contains("panicked") && !e.contains("Broken pipe"), "{args:?}: {e}");
+        assert!(
+            matches!(o.status.code(), Some(0 | 3)),
+            "{args:?}: {:?} {e}",
+            o.status
+        );
+        assert!(
+            !e.contains("panicked") && !e.contains("Broken pipe"),
+            "{args:?}: {e}"
+        );
     }
 }
 
@@ -411,7 +460,10 @@ fn v102_says_why_807_rows_gave_803_samples() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let e = &r["estimates"][0];
-    assert_eq!((e["samples"].as_u64(), e["rows"]["read"].as_u64()), (Some(803), Some(807)));
+    assert_eq!(
+        (e["samples"].as_u64(), e["rows"]["read"].as_u64()),
+        (Some(803), Some(807))
+    );
     assert_eq!(e["rows"]["duplicate_stamp"], 4);
 }
 
@@ -433,13 +485,25 @@ fn names_from_files_are_escaped() {
     let o = run(&["topics", s(&path)]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("/a\\nerror: fake\\x1b[31m"), "{out}");
-    assert!(!out.contains('\x1b') && !out.lines().any(|l| l.starts_with("error")), "{out}");
+    assert!(
+        !out.contains('\x1b') && !out.lines().any(|l| l.starts_with("error")),
+        "{out}"
+    );
     let o = run(&["export", s(&path), "--topic", "/nope", s(&f.p("o.tum"))]);
     let e = stderr(&o);
     assert_eq!(e.lines().count(), 1, "{e}");
-    assert!(e.contains("/a\\nerror: fake\\x1b[31m") && !e.contains('\x1b'), "{e}");
+    assert!(
+        e.contains("/a\\nerror: fake\\x1b[31m") && !e.contains('\x1b'),
+        "{e}"
+    );
     // A message that fails to decode names the topic escaped too.
-    let o = run(&["export", s(&path), "--topic", "/a\nerror: fake\x1b[31m", s(&f.p("o.tum"))]);
+    let o = run(&[
+        "export",
+        s(&path),
+        "--topic",
+        "/a\nerror: fake\x1b[31m",
+        s(&f.p("o.tum")),
+    ]);
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
     assert_eq!(e.lines().count(), 1, "{e}");
@@ -557,10 +621,16 @@ fn run_mutants(kind: &str) {
     use std::os::unix::process::CommandExt;
     let exe = std::env::current_exe().unwrap();
     let mut c = Command::new(exe);
-    c.args(["--exact", "mutation_child", "--nocapture", "--test-threads", "1"])
-        .env("HOSTILE_MUTANTS", kind)
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped());
+    c.args([
+        "--exact",
+        "mutation_child",
+        "--nocapture",
+        "--test-threads",
+        "1",
+    ])
+    .env("HOSTILE_MUTANTS", kind)
+    .stdout(std::process::Stdio::piped())
+    .stderr(std::process::Stdio::piped());
     let limit: u64 = 1 << 30;
     unsafe {
         c.pre_exec(move || {
@@ -595,7 +665,10 @@ fn run_mutants(kind: &str) {
         out.contains(&format!("mutants: {MUTANTS}, panics: []")),
         "{kind}: {out}"
     );
-    eprintln!("{kind}: {MUTANTS} mutants in {:.1} s", start.elapsed().as_secs_f64());
+    eprintln!(
+        "{kind}: {MUTANTS} mutants in {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
 }
 
 #[test]

@@ -14,7 +14,6 @@ pub mod metadata;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-
 use crate::align::curvature::{curvature_signature, CurvatureSample};
 use crate::decode::message_kind;
 use crate::error::{Error, Result};

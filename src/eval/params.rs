@@ -42,23 +42,142 @@ const COARSE_GRID_S: f64 = 0.02;
 
 /// Every numeric `eval` parameter.
 pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec { flag: "--eps-min", min: Bound::Exclusive(0.0), max: Bound::Inclusive(1000.0), default: None, unit: "m", help: "ε for curvature and path length (default: by --platform)" },
-    ParamSpec { flag: "--curvature-eps", min: Bound::Exclusive(0.0), max: Bound::Inclusive(1000.0), default: None, unit: "m", help: "ε of the curvature signature" },
-    ParamSpec { flag: "--path-eps", min: Bound::Exclusive(0.0), max: Bound::Inclusive(1000.0), default: None, unit: "m", help: "ε of the path-length decimation" },
-    ParamSpec { flag: "--theta-max", min: Bound::Exclusive(0.0), max: Bound::Inclusive(std::f64::consts::PI), default: Some(std::f64::consts::FRAC_PI_2), unit: "rad", help: "turning angles above it are discontinuities" },
-    ParamSpec { flag: "--dt-max", min: Bound::Exclusive(0.0), max: Bound::Inclusive(86_400.0), default: Some(2.0), unit: "s", help: "a chord slower than this is a gap or a standstill" },
-    ParamSpec { flag: "--window", min: Bound::Exclusive(0.0), max: Bound::Inclusive(1.0e6), default: Some(5.0), unit: "m", help: "Drift Error window, metres of reference path" },
-    ParamSpec { flag: "--overlap", min: Bound::Inclusive(0.0), max: Bound::Exclusive(1.0), default: Some(0.0), unit: "", help: "window overlap fraction" },
-    ParamSpec { flag: "--lever-arm", min: Bound::Inclusive(0.0), max: Bound::Inclusive(100.0), default: Some(0.1), unit: "m", help: "bound a of the paper's lever-arm correction" },
-    ParamSpec { flag: "--max-offset", min: Bound::Exclusive(0.0), max: Bound::Inclusive(86_400.0), default: Some(30.0), unit: "s", help: "largest clock offset searched" },
-    ParamSpec { flag: "--grid", min: Bound::Inclusive(1.0e-4), max: Bound::Inclusive(COARSE_GRID_S), default: Some(0.001), unit: "s", help: "fine step of the offset search" },
-    ParamSpec { flag: "--time-offset", min: Bound::Inclusive(-1.0e10), max: Bound::Inclusive(1.0e10), default: None, unit: "s", help: "offset applied instead of searched" },
-    ParamSpec { flag: "--t-start", min: Bound::Inclusive(-1.0e10), max: Bound::Inclusive(1.0e10), default: None, unit: "s", help: "crop start (epoch, or from the first reference sample)" },
-    ParamSpec { flag: "--t-end", min: Bound::Inclusive(-1.0e10), max: Bound::Inclusive(1.0e10), default: None, unit: "s", help: "crop end" },
-    ParamSpec { flag: "--origin latitude", min: Bound::Inclusive(-90.0), max: Bound::Inclusive(90.0), default: None, unit: "°", help: "ENU origin latitude" },
-    ParamSpec { flag: "--origin longitude", min: Bound::Inclusive(-180.0), max: Bound::Inclusive(180.0), default: None, unit: "°", help: "ENU origin longitude" },
-    ParamSpec { flag: "--origin height", min: Bound::Inclusive(-1.0e4), max: Bound::Inclusive(1.0e5), default: None, unit: "m", help: "ENU origin ellipsoidal height" },
-    ParamSpec { flag: "--reference-lever/--estimate-lever", min: Bound::Inclusive(-1000.0), max: Bound::Inclusive(1000.0), default: None, unit: "m", help: "sensor lever arm component" },
+    ParamSpec {
+        flag: "--eps-min",
+        min: Bound::Exclusive(0.0),
+        max: Bound::Inclusive(1000.0),
+        default: None,
+        unit: "m",
+        help: "ε for curvature and path length (default: by --platform)",
+    },
+    ParamSpec {
+        flag: "--curvature-eps",
+        min: Bound::Exclusive(0.0),
+        max: Bound::Inclusive(1000.0),
+        default: None,
+        unit: "m",
+        help: "ε of the curvature signature",
+    },
+    ParamSpec {
+        flag: "--path-eps",
+        min: Bound::Exclusive(0.0),
+        max: Bound::Inclusive(1000.0),
+        default: None,
+        unit: "m",
+        help: "ε of the path-length decimation",
+    },
+    ParamSpec {
+        flag: "--theta-max",
+        min: Bound::Exclusive(0.0),
+        max: Bound::Inclusive(std::f64::consts::PI),
+        default: Some(std::f64::consts::FRAC_PI_2),
+        unit: "rad",
+        help: "turning angles above it are discontinuities",
+    },
+    ParamSpec {
+        flag: "--dt-max",
+        min: Bound::Exclusive(0.0),
+        max: Bound::Inclusive(86_400.0),
+        default: Some(2.0),
+        unit: "s",
+        help: "a chord slower than this is a gap or a standstill",
+    },
+    ParamSpec {
+        flag: "--window",
+        min: Bound::Exclusive(0.0),
+        max: Bound::Inclusive(1.0e6),
+        default: Some(5.0),
+        unit: "m",
+        help: "Drift Error window, metres of reference path",
+    },
+    ParamSpec {
+        flag: "--overlap",
+        min: Bound::Inclusive(0.0),
+        max: Bound::Exclusive(1.0),
+        default: Some(0.0),
+        unit: "",
+        help: "window overlap fraction",
+    },
+    ParamSpec {
+        flag: "--lever-arm",
+        min: Bound::Inclusive(0.0),
+        max: Bound::Inclusive(100.0),
+        default: Some(0.1),
+        unit: "m",
+        help: "bound a of the paper's lever-arm correction",
+    },
+    ParamSpec {
+        flag: "--max-offset",
+        min: Bound::Exclusive(0.0),
+        max: Bound::Inclusive(86_400.0),
+        default: Some(30.0),
+        unit: "s",
+        help: "largest clock offset searched",
+    },
+    ParamSpec {
+        flag: "--grid",
+        min: Bound::Inclusive(1.0e-4),
+        max: Bound::Inclusive(COARSE_GRID_S),
+        default: Some(0.001),
+        unit: "s",
+        help: "fine step of the offset search",
+    },
+    ParamSpec {
+        flag: "--time-offset",
+        min: Bound::Inclusive(-1.0e10),
+        max: Bound::Inclusive(1.0e10),
+        default: None,
+        unit: "s",
+        help: "offset applied instead of searched",
+    },
+    ParamSpec {
+        flag: "--t-start",
+        min: Bound::Inclusive(-1.0e10),
+        max: Bound::Inclusive(1.0e10),
+        default: None,
+        unit: "s",
+        help: "crop start (epoch, or from the first reference sample)",
+    },
+    ParamSpec {
+        flag: "--t-end",
+        min: Bound::Inclusive(-1.0e10),
+        max: Bound::Inclusive(1.0e10),
+        default: None,
+        unit: "s",
+        help: "crop end",
+    },
+    ParamSpec {
+        flag: "--origin latitude",
+        min: Bound::Inclusive(-90.0),
+        max: Bound::Inclusive(90.0),
+        default: None,
+        unit: "°",
+        help: "ENU origin latitude",
+    },
+    ParamSpec {
+        flag: "--origin longitude",
+        min: Bound::Inclusive(-180.0),
+        max: Bound::Inclusive(180.0),
+        default: None,
+        unit: "°",
+        help: "ENU origin longitude",
+    },
+    ParamSpec {
+        flag: "--origin height",
+        min: Bound::Inclusive(-1.0e4),
+        max: Bound::Inclusive(1.0e5),
+        default: None,
+        unit: "m",
+        help: "ENU origin ellipsoidal height",
+    },
+    ParamSpec {
+        flag: "--reference-lever/--estimate-lever",
+        min: Bound::Inclusive(-1000.0),
+        max: Bound::Inclusive(1000.0),
+        default: None,
+        unit: "m",
+        help: "sensor lever arm component",
+    },
 ];
 
 /// Memory the offset search may take for its lags and grids.
@@ -237,7 +356,10 @@ mod tests {
     #[test]
     fn refusal_names_flag_value_and_range() {
         let e = check("--grid", 1e-9).unwrap_err().to_string();
-        assert!(e.contains("--grid 1e-9") && e.contains("[1e-4, 0.02] s"), "{e}");
+        assert!(
+            e.contains("--grid 1e-9") && e.contains("[1e-4, 0.02] s"),
+            "{e}"
+        );
         let e = check("--overlap", 1.0).unwrap_err().to_string();
         assert!(e.contains("[0, 1)"), "{e}");
     }

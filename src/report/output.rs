@@ -76,8 +76,8 @@ impl OutputGuard {
                 None
             };
             if let Some(how) = how {
-                let how = if out_canon != Some(out.to_path_buf()) && std::fs::symlink_metadata(out)
-                    .is_ok_and(|m| m.file_type().is_symlink())
+                let how = if out_canon != Some(out.to_path_buf())
+                    && std::fs::symlink_metadata(out).is_ok_and(|m| m.file_type().is_symlink())
                 {
                     "a symlink to it"
                 } else {
@@ -157,7 +157,9 @@ impl AtomicFile {
 
     /// The temporary file, to write into.
     pub fn file(&mut self) -> &mut File {
-        self.file.as_mut().expect("an AtomicFile is used until committed")
+        self.file
+            .as_mut()
+            .expect("an AtomicFile is used until committed")
     }
 
     /// The target path.

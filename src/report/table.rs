@@ -35,7 +35,10 @@ pub fn render(report: &Report) -> String {
         let _ = writeln!(
             s,
             "\nestimate {} ({}, {}, {} samples)",
-            escape(&e.name), escape(&e.topic), escape(&e.type_name), e.samples
+            escape(&e.name),
+            escape(&e.topic),
+            escape(&e.type_name),
+            e.samples
         );
         if let Some(rows) = e.rows.describe() {
             let _ = writeln!(s, "  rows: {rows}");

@@ -15,8 +15,8 @@ use crate::sources::euroc::{is_euroc_header, read_euroc_audited};
 use crate::sources::kitti::read_kitti_audited;
 use crate::sources::mapped_csv::{read_header, read_mapped_csv_audited, CsvMapping};
 use crate::sources::tum::read_tum_audited;
-use crate::trajectory::rows::RowAudit;
 use crate::sources::{ExtractOptions, ExtractedTopic, Extraction, Progress, Source, TopicInfo};
+use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
 /// A text trajectory format.

@@ -142,7 +142,14 @@ mod tests {
     #[test]
     fn counts_every_reason() {
         let mut t = Trajectory::new(false);
-        for (s, x) in [(3, 0.0), (1, 1.0), (1, 2.0), (2, f64::NAN), (4, 1e300), (5, 0.5)] {
+        for (s, x) in [
+            (3, 0.0),
+            (1, 1.0),
+            (1, 2.0),
+            (2, f64::NAN),
+            (4, 1e300),
+            (5, 0.5),
+        ] {
             t.push(s, Vector3::new(x, 0.0, 0.0), None);
         }
         let a = t.clean();

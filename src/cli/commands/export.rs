@@ -50,7 +50,8 @@ pub fn run(a: ExportArgs) -> Result<u8> {
         ExportFormatArg::Tum => write_tum(&mut bytes, traj)?,
         ExportFormatArg::Csv => write_csv(&mut bytes, traj)?,
     }
-    let guard = OutputGuard::new(std::iter::once(a.recording.clone()).chain(a.text.kitti_times.clone()));
+    let guard =
+        OutputGuard::new(std::iter::once(a.recording.clone()).chain(a.text.kitti_times.clone()));
     guard.write("OUT", &a.out, &bytes)?;
     for w in &extraction.warnings {
         crate::cli::warn(&w.code, &w.message);

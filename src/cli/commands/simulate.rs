@@ -22,7 +22,8 @@ pub fn run(a: SimulateArgs) -> Result<u8> {
         seed: a.seed,
         time_offset_s: a.time_offset,
         scale_error: a.scale_error,
-        est_lever_m: parse_triple("--lever", &a.lever).map_err(trajdrift::Error::InvalidArgument)?,
+        est_lever_m: parse_triple("--lever", &a.lever)
+            .map_err(trajdrift::Error::InvalidArgument)?,
         clock_drift_ppm: a.clock_drift_ppm,
         ..MissionConfig::default()
     };

@@ -56,7 +56,10 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
 fn render(topics: &[TopicInfo], pairs: &[FramePair], presets: &[String]) -> String {
     let mut s = String::new();
     let width = column(topics.iter().map(|t| escape(&t.topic).chars().count()), 5);
-    let type_width = column(topics.iter().map(|t| escape(&t.type_name).chars().count()), 4);
+    let type_width = column(
+        topics.iter().map(|t| escape(&t.type_name).chars().count()),
+        4,
+    );
     let _ = writeln!(
         s,
         "{:<width$}  {:<type_width$} {:>9}  trajectory",

@@ -87,9 +87,13 @@ impl BagSource {
         let mut counts: HashMap<u32, u64> = HashMap::new();
         let (mut header, mut data) = (Vec::new(), Vec::new());
         let mut pos = self.index_pos;
-        while let Next::Record { data_len } =
-            records::read_record(&mut r, &mut header, &self.path, self.size.saturating_sub(pos))
-                .ok()?
+        while let Next::Record { data_len } = records::read_record(
+            &mut r,
+            &mut header,
+            &self.path,
+            self.size.saturating_sub(pos),
+        )
+        .ok()?
         {
             pos += 8 + header.len() as u64 + data_len as u64;
             data.resize(data_len as usize, 0);
@@ -293,7 +297,12 @@ impl Recording for BagSource {
         loop {
             // Read up to the end of the file, not to `index_pos`: the index only repeats connections
             // (already seen ones are skipped), and a damaged `index_pos` must not hide the data.
-            let data_len = match records::read_record(&mut r, &mut header, path, self.size.saturating_sub(pos))? {
+            let data_len = match records::read_record(
+                &mut r,
+                &mut header,
+                path,
+                self.size.saturating_sub(pos),
+            )? {
                 Next::End => break,
                 Next::Truncated => {
                     out.truncated_at = Some(pos);

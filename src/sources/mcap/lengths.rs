@@ -35,13 +35,17 @@ impl Walk<'_> {
     fn u32(&mut self, what: &str) -> Result<u32, String> {
         let at = self.pos;
         self.skip(4, what)?;
-        Ok(u32::from_le_bytes(self.data[at..at + 4].try_into().unwrap_or([0; 4])))
+        Ok(u32::from_le_bytes(
+            self.data[at..at + 4].try_into().unwrap_or([0; 4]),
+        ))
     }
 
     fn u64(&mut self, what: &str) -> Result<u64, String> {
         let at = self.pos;
         self.skip(8, what)?;
-        Ok(u64::from_le_bytes(self.data[at..at + 8].try_into().unwrap_or([0; 8])))
+        Ok(u64::from_le_bytes(
+            self.data[at..at + 8].try_into().unwrap_or([0; 8]),
+        ))
     }
 
     /// A `u32`-prefixed string or byte array.
@@ -55,7 +59,9 @@ impl Walk<'_> {
         let n = self.u32(what)? as u64;
         let left = (self.data.len() - self.pos) as u64;
         if n > left {
-            return Err(format!("{what} of {n} bytes, with {left} left in the record"));
+            return Err(format!(
+                "{what} of {n} bytes, with {left} left in the record"
+            ));
         }
         let end = self.pos as u64 + n;
         while (self.pos as u64) < end {

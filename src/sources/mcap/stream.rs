@@ -162,7 +162,10 @@ where
                 }
                 op::CHANNEL => {
                     check_record(opcode, data).map_err(|d| {
-                        corrupt(format!("channel record before byte {}: {d}", out.bytes_read))
+                        corrupt(format!(
+                            "channel record before byte {}: {d}",
+                            out.bytes_read
+                        ))
                     })?;
                     let Record::Channel(c) = mcap::parse_record(opcode, data)
                         .map_err(|e| corrupt(format!("channel record: {e}")))?
