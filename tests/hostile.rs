@@ -702,3 +702,30 @@ fn length_checks_accept_every_conformance_file() {
     }
     assert_eq!(n, 416);
 }
+
+/// Batch outputs go through the same guard: `--annotate` into the recordings' own folder would
+/// replace `in.mcap` with its annotated copy.
+#[test]
+fn batch_outputs_that_resolve_to_an_input_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("in.mcap");
+    small_mcap(&rec, 400);
+    let before = std::fs::read(&rec).unwrap();
+    let o = run(&[
+        "batch",
+        s(dir.path()),
+        "--reference",
+        "/reference/position",
+        "--estimate",
+        "/estimate/odom",
+        "--out",
+        s(dir.path()),
+        "--annotate",
+        "--force",
+        "-q",
+    ]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("writing it would destroy the input"), "{e}");
+    assert_eq!(std::fs::read(&rec).unwrap(), before);
+}
