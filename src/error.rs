@@ -235,6 +235,7 @@ pub fn io_hint(e: &std::io::Error) -> &'static str {
         K::IsADirectory => "pass a file, not a folder",
         K::UnexpectedEof => "the file ends early: it may be truncated or still being written",
         K::StorageFull => "free some disk space",
+        K::InvalidData => "its content is not what was expected (not UTF-8 text?): check that it is the file you meant",
         _ => "check that the file is readable and the disk is healthy",
     }
 }

@@ -745,3 +745,32 @@ fn batch_outputs_that_resolve_to_an_input_are_refused() {
     assert!(e.contains("writing it would destroy the input"), "{e}");
     assert_eq!(std::fs::read(&rec).unwrap(), before);
 }
+
+/// Fuzzing finds, kept as regression tests: each input must end, with an error or a result, within
+/// seconds.
+#[test]
+fn fuzz_regressions_end_quickly() {
+    let dir = tempfile::tempdir().unwrap();
+    // text_readers timeout: a KITTI row whose matrix holds 7.7e17 made the rotation projection loop
+    // for ever.
+    let cases: [(&str, &[u8]); 1] = [(
+        "kitti_huge_matrix.txt",
+        b"1 0 0 0 077777777777777777 1 0 0 0 0 1 0\n]1 \x01\x00\x00\x85",
+    )];
+    for (name, bytes) in cases {
+        let path = dir.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let start = std::time::Instant::now();
+        let o = run(&["export", s(&path), s(&dir.path().join("o.tum"))]);
+        assert!(
+            matches!(o.status.code(), Some(0..=3)),
+            "{name}: {:?}",
+            o.status
+        );
+        assert!(
+            start.elapsed().as_secs() < 10,
+            "{name}: {:?}",
+            start.elapsed()
+        );
+    }
+}

@@ -1,3 +1,4 @@
+#![allow(dead_code)]
 //! Shared by the file-based targets: the readers take paths, so each input is written to a file on
 //! tmpfs (one per process) and read through the same public API the CLI uses.
 

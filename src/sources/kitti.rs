@@ -72,7 +72,15 @@ pub fn read_kitti_audited(path: &Path, times: Option<&Path>) -> Result<(Trajecto
             continue;
         }
         // The matrices are rounded to 7 digits: project onto the nearest rotation.
-        let r = Rotation3::from_matrix(&m);
+        if m.iter().any(|x| x.abs() > 1.5) {
+            // Not a rotation (its entries are within ±1): nalgebra's projection never ends on such a
+            // matrix (a value of 7e17, found by fuzzing). Kept as a row out of range, which `clean`
+            // counts and drops.
+            traj.push(stamp, Vector3::repeat(f64::MAX), None);
+            continue;
+        }
+        // Bounded iterations as well: `from_matrix` loops until it converges.
+        let r = Rotation3::from_matrix_eps(&m, f64::EPSILON, 100, Rotation3::identity());
         traj.push(stamp, p, Some(UnitQuaternion::from_rotation_matrix(&r)));
     }
     if let Some(s) = &stamps {
