@@ -12,12 +12,12 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 /// Everything that can go wrong while evaluating a recording.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// The file could not be opened or read.
-    #[error("{path}: cannot read: {source}")]
+    /// The file could not be opened or read. The cause is said once (it is not also the error's
+    /// `source`, so a printed chain does not repeat it), followed by what to do.
+    #[error("{path}: cannot read: {}; {}", crate::error::io_cause(.cause), crate::error::io_hint(.cause))]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        cause: std::io::Error,
     },
 
     /// The file is not an MCAP recording (bad magic, or no record could be parsed).
@@ -29,7 +29,7 @@ pub enum Error {
     CorruptMcap { path: PathBuf, detail: String },
 
     /// A requested topic is not in the recording.
-    #[error("{path}: topic {topic} not found; topics present: {}", .available.join(", "))]
+    #[error("{path}: topic {topic} not found; {}", crate::error::present(.available))]
     TopicNotFound {
         path: PathBuf,
         topic: String,
@@ -56,7 +56,7 @@ pub enum Error {
     },
 
     /// A message could not be decoded.
-    #[error("{path}: topic {topic}: cannot decode message {index}: {detail}; check that the channel's schema matches its messages")]
+    #[error("{path}: topic {topic}: cannot decode message {index}: {detail}; the message is damaged, or the channel's schema does not match its messages")]
     Decode {
         path: PathBuf,
         topic: String,
@@ -100,6 +100,27 @@ pub enum Error {
     #[error("{path}: cannot write: {detail}")]
     Output { path: PathBuf, detail: String },
 
+    /// An output resolves to one of the inputs (same path, a symlink to it, or a hard link).
+    #[error("{flag} {out}: is the input {input} ({how}); writing it would destroy the input, choose another output file")]
+    OutputIsInput {
+        flag: String,
+        out: PathBuf,
+        input: PathBuf,
+        how: String,
+    },
+
+    /// Standard output could not be written.
+    #[error("<stdout>: cannot write: {}", crate::error::io_cause(.cause))]
+    Stdout { cause: std::io::Error },
+
+    /// A recording is damaged at a known place: the file, the byte offset and what was wrong there.
+    #[error("{path}: damaged at byte {offset}: {detail}; the file is not a valid recording from there on (repair a copy, e.g. `mcap recover` or `rosbag reindex`)")]
+    Damaged {
+        path: PathBuf,
+        offset: u64,
+        detail: String,
+    },
+
     /// A ROS 1 bag is damaged or not a version 2.0 bag.
     #[error("{path}: cannot read ROS 1 bag ({detail}); check it with `rosbag info`, or `rosbag reindex` a copy")]
     CorruptBag { path: PathBuf, detail: String },
@@ -140,10 +161,90 @@ pub enum Error {
 
 impl Error {
     /// Builds an [`Error::Io`] for `path`.
-    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    pub fn io(path: impl Into<PathBuf>, cause: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
-            source,
+            cause,
         }
+    }
+
+    /// The exit status this error ends the process with: usage errors (a flag's value, an output
+    /// that would overwrite an input) are [`ExitStatus::Usage`], everything else a failure.
+    pub fn exit_status(&self) -> ExitStatus {
+        match self {
+            Error::InvalidArgument(_) | Error::OutputIsInput { .. } => ExitStatus::Usage,
+            _ => ExitStatus::Failure,
+        }
+    }
+
+    /// Whether this is a write to a closed standard output (`trajdrift … | head`): the reader has
+    /// what it wanted, so the process ends quietly, like ripgrep.
+    pub fn is_broken_pipe(&self) -> bool {
+        matches!(self, Error::Io { cause, .. } | Error::Stdout { cause }
+            if cause.kind() == std::io::ErrorKind::BrokenPipe)
+    }
+}
+
+/// How a command ended; the one exit-code type. The library returns it, the binary maps it to the
+/// process's exit code.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ExitStatus {
+    /// Everything went fine (0).
+    Ok = 0,
+    /// The command failed: bad or damaged input, an I/O error (1).
+    Failure = 1,
+    /// The command line or a parameter value is wrong (2).
+    Usage = 2,
+    /// The command finished, with a warning the user must see (truncated recording, weak offset) (3).
+    Warning = 3,
+}
+
+impl ExitStatus {
+    /// The process exit code.
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// [`ExitStatus::Warning`] when there is at least one warning, else [`ExitStatus::Ok`].
+    pub fn from_warnings(any: bool) -> Self {
+        if any {
+            ExitStatus::Warning
+        } else {
+            ExitStatus::Ok
+        }
+    }
+}
+
+/// The topics a recording holds, for "not found" messages; says when there is none.
+pub fn present(available: &[String]) -> String {
+    if available.is_empty() {
+        "the recording holds no topic at all (it is empty or damaged; run `trajdrift topics` on it)"
+            .into()
+    } else {
+        format!("topics present: {}", available.join(", "))
+    }
+}
+
+/// An I/O error's message without the `(os error N)` suffix std adds.
+pub fn io_cause(e: &std::io::Error) -> String {
+    let s = e.to_string();
+    match s.rfind(" (os error ") {
+        Some(i) if s.ends_with(')') => s[..i].to_string(),
+        _ => s,
+    }
+}
+
+/// What to do about an I/O error, by its kind.
+pub fn io_hint(e: &std::io::Error) -> &'static str {
+    use std::io::ErrorKind as K;
+    match e.kind() {
+        K::NotFound => "check the path (run `ls` on it)",
+        K::PermissionDenied => "check the file's permissions",
+        K::IsADirectory => "pass a file, not a folder",
+        K::UnexpectedEof => "the file ends early: it may be truncated or still being written",
+        K::StorageFull => "free some disk space",
+        K::InvalidData => "its content is not what was expected (not UTF-8 text?): check that it is the file you meant",
+        _ => "check that the file is readable and the disk is healthy",
     }
 }

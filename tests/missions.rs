@@ -194,7 +194,7 @@ fn annotate_is_refused_before_the_evaluation() {
         "--force",
     ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("overwrite the input"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("would destroy the input"));
     // Inside the mission folder (a new file there would join the mission).
     let o = run(&[
         "eval",

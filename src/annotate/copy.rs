@@ -137,6 +137,8 @@ pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
         if opcode == op::DATA_END {
             break;
         }
+        crate::sources::mcap::lengths::check_record(opcode, data)
+            .map_err(|d| corrupt(format!("record 0x{opcode:02x}: {d}")))?;
         let record = mcap::parse_record(opcode, data)
             .map_err(|e| corrupt(format!("record 0x{opcode:02x}: {e}")))?;
         if let Record::Header(h) = &record {

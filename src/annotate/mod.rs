@@ -21,6 +21,7 @@ use crate::error::{Error, Result};
 use crate::eval::config::{EvalConfig, TrajectoryInput};
 use crate::eval::inputs::Inputs;
 use crate::report::json::Report;
+use crate::report::output::{AtomicFile, OutputGuard};
 use crate::sources::Progress;
 use crate::trajectory::Trajectory;
 use channels::{
@@ -39,24 +40,10 @@ pub struct AnnotateOutcome {
     pub counts: Counts,
 }
 
-/// Checks that `out` may be written for `input`: not the input itself, and not existing unless `force`.
+/// Checks that `out` may be written for `input`: not the input itself (by path, symlink or inode:
+/// [`OutputGuard`]), and not existing unless `force`.
 pub fn check_output(input: &Path, out: &Path, force: bool) -> Result<()> {
-    let canon = |p: &Path| -> Option<PathBuf> {
-        if let Ok(c) = p.canonicalize() {
-            return Some(c);
-        }
-        let parent = match p.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        Some(parent.canonicalize().ok()?.join(p.file_name()?))
-    };
-    if canon(input).is_some_and(|i| canon(out).is_some_and(|o| i == o)) {
-        return Err(Error::InvalidArgument(format!(
-            "{}: --annotate would overwrite the input recording; choose another output file",
-            out.display()
-        )));
-    }
+    OutputGuard::new([input]).check("--annotate", out)?;
     if out.exists() && !force {
         return Err(Error::InvalidArgument(format!(
             "{}: exists; pass --force to replace it",
@@ -187,8 +174,8 @@ pub fn annotate(
     })
 }
 
-/// Writes `out` through `write` into a temporary file beside it, synced and renamed when complete;
-/// removed on failure.
+/// Writes `out` through `write` with the one atomic writer ([`AtomicFile`]: a temporary file beside
+/// it, synced and renamed when complete, removed on failure).
 fn write_atomically(
     out: &Path,
     write: impl FnOnce(
@@ -199,28 +186,13 @@ fn write_atomically(
         path: out.to_path_buf(),
         detail: e.to_string(),
     };
-    let dir = match out.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = out
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out.mcap".into());
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| -> Result<CopyOutcome> {
-        let file = std::fs::File::create(&tmp).map_err(out_err)?;
-        let (outcome, mut sink) = write(std::io::BufWriter::new(file))?;
-        sink.flush().map_err(out_err)?;
-        sink.get_ref().sync_all().map_err(out_err)?;
-        drop(sink);
-        std::fs::rename(&tmp, out).map_err(out_err)?;
-        Ok(outcome)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    let mut target = AtomicFile::create(out)?;
+    let file = target.file().try_clone().map_err(out_err)?;
+    let (outcome, mut sink) = write(std::io::BufWriter::new(file))?;
+    sink.flush().map_err(out_err)?;
+    drop(sink);
+    target.commit()?;
+    Ok(outcome)
 }
 
 fn curvature_messages(traj: &Trajectory, config: &EvalConfig) -> Vec<(u64, CurvatureMessage)> {

@@ -14,7 +14,7 @@ use super::summary::{MissionResult, Summary, Timing, MISSION_KIND};
 use crate::annotate::annotate;
 use crate::error::{Error, Result};
 use crate::eval::evaluate_with_inputs;
-use crate::report::output::write_output;
+use crate::report::output::{write_output, OutputGuard};
 
 /// How to run a batch.
 #[derive(Debug, Clone)]
@@ -124,6 +124,7 @@ pub fn run_batch(
             None => todo.push(m),
         }
     }
+    check_outputs(&todo, opts)?;
     progress(BatchEvent::Planned {
         missions: todo.len(),
     });
@@ -150,6 +151,23 @@ pub fn run_batch(
         skipped,
         summary,
     })
+}
+
+/// Refuses the batch (a usage error) when an output it would write is one of a mission's inputs:
+/// `<mission>.json`, `<mission>.mcap`, the summaries, or an `--export-aligned` file.
+fn check_outputs(todo: &[&MissionSpec], opts: &BatchOptions) -> Result<()> {
+    let all = OutputGuard::new(todo.iter().flat_map(|m| m.config.input_paths()));
+    for name in ["summary.json", "summary.csv", "summary.md"] {
+        all.check("--out", &opts.out_dir.join(name))?;
+    }
+    for m in todo {
+        all.check("--out", &result_path(&opts.out_dir, &m.name))?;
+        if opts.annotate {
+            all.check("--annotate", &opts.out_dir.join(format!("{}.mcap", m.name)))?;
+        }
+        m.config.check_outputs()?;
+    }
+    Ok(())
 }
 
 /// Runs one mission and writes `<mission>.json`; only a failure to write that file is an `Err`.

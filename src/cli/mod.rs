@@ -8,14 +8,13 @@ pub mod progress;
 
 use std::process::ExitCode;
 
+use trajdrift::error::ExitStatus;
+use trajdrift::report::escape::escape_line;
+
 /// Everything went fine.
-pub const EXIT_OK: u8 = 0;
-/// The command failed (bad input, I/O error).
-pub const EXIT_FAILURE: u8 = 1;
-/// The command line or a parameter value is wrong.
-pub const EXIT_USAGE: u8 = 2;
+pub const EXIT_OK: u8 = ExitStatus::Ok as u8;
 /// The command finished, but with a warning the user must see (weak offset, truncated recording).
-pub const EXIT_WARNING: u8 = 3;
+pub const EXIT_WARNING: u8 = ExitStatus::Warning as u8;
 
 /// Parses the command line (clap exits with code 2 and its message on a usage error).
 pub fn parse() -> args::Cli {
@@ -39,13 +38,58 @@ pub fn run(cli: args::Cli) -> ExitCode {
     };
     match result {
         Ok(code) => ExitCode::from(code),
+        Err(e) if is_broken_pipe(&e) => ExitCode::from(EXIT_OK),
         Err(e) => {
-            eprintln!("error: {e:#}");
-            let usage = matches!(
-                e.downcast_ref::<trajdrift::Error>(),
-                Some(trajdrift::Error::InvalidArgument(_))
-            );
-            ExitCode::from(if usage { EXIT_USAGE } else { EXIT_FAILURE })
+            eprintln!("error: {}", message(&e));
+            ExitCode::from(exit_status(&e).code())
         }
     }
+}
+
+/// The library's exit status for an error (the one exit-code type); a failure when the error did not
+/// come from the library.
+pub fn exit_status(e: &anyhow::Error) -> ExitStatus {
+    e.chain()
+        .find_map(|c| c.downcast_ref::<trajdrift::Error>())
+        .map_or(ExitStatus::Failure, trajdrift::Error::exit_status)
+}
+
+/// A closed standard output (`trajdrift topics … | head`): not an error, the reader has what it wanted.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<trajdrift::Error>()
+            .is_some_and(trajdrift::Error::is_broken_pipe)
+            || c.downcast_ref::<std::io::Error>()
+                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// The error chain on one line, each cause said once (a cause already in the message before it is
+/// skipped), control characters from file names escaped.
+pub fn message(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if !line.contains(&text) {
+            if !line.is_empty() {
+                line.push_str(": ");
+            }
+            line.push_str(&text);
+        }
+    }
+    escape_line(&line)
+}
+
+/// Writes `text` to standard output; a closed pipe comes back as an error the dispatch ends quietly on.
+pub fn emit(text: &str) -> trajdrift::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|_| out.flush())
+        .map_err(|cause| trajdrift::Error::Stdout { cause })
+}
+
+/// Prints a warning line to stderr, names from files escaped.
+pub fn warn(code: &str, message: &str) {
+    eprintln!("warning [{code}]: {}", escape_line(message));
 }

@@ -382,18 +382,45 @@ impl EvalConfig {
             .map(|(_, l)| l)
     }
 
+    /// Every file the evaluation reads: the recording, the text trajectories, KITTI times. Outputs are
+    /// checked against them ([`crate::report::output::OutputGuard`]).
+    pub fn input_paths(&self) -> Vec<PathBuf> {
+        let files = std::iter::once(&self.reference)
+            .chain(&self.estimates)
+            .filter_map(|i| match &i.input {
+                TrajectoryInput::TumFile(p) => Some(p.clone()),
+                TrajectoryInput::Topic(_) => None,
+            });
+        self.recording
+            .iter()
+            .cloned()
+            .chain(files)
+            .chain(self.text.kitti_times.iter().cloned())
+            .collect()
+    }
+
+    /// The guard every output of this evaluation is checked with.
+    pub fn output_guard(&self) -> crate::report::output::OutputGuard {
+        crate::report::output::OutputGuard::new(self.input_paths())
+    }
+
+    /// Refuses the outputs the library writes itself (`--export-aligned`, one file per estimate) when
+    /// one would overwrite an input.
+    pub fn check_outputs(&self) -> Result<()> {
+        let Some(file) = &self.export_aligned else {
+            return Ok(());
+        };
+        let guard = self.output_guard();
+        for e in &self.estimates {
+            let path = super::export::aligned_path(file, &e.name, self.estimates.len());
+            guard.check("--export-aligned", &path)?;
+        }
+        Ok(())
+    }
+
     /// Checks every value; the error says which flag is wrong and what it accepts.
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::InvalidArgument(m));
-        let positive = |name: &str, v: f64| -> Result<()> {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(Error::InvalidArgument(format!(
-                    "{name} must be a positive number, got {v}"
-                )))
-            }
-        };
         if self.estimates.is_empty() {
             return bad("give at least one --estimate TOPIC or --estimate-file FILE".into());
         }
@@ -411,53 +438,14 @@ impl EvalConfig {
                 w[0]
             ));
         }
-        positive("--curvature-eps", self.curvature_eps())?;
-        positive("--path-eps", self.path_eps())?;
-        positive("--theta-max", self.theta_max_rad)?;
-        positive("--dt-max", self.dt_max_s)?;
-        if let Some(v) = self.curvature_dt_max_s {
-            positive("--dt-max", v)?;
-        }
-        positive("--max-offset", self.max_offset_s)?;
-        if let Some(w) = self.offset_profile.window_s {
-            positive("--offset-window", w)?;
-        }
-        if let Some(w) = self.offset_profile.step_s {
-            positive("--offset-step", w)?;
-        }
-        positive("--grid", self.grid_s)?;
-        if self.lever_arm_m.is_nan() || self.lever_arm_m < 0.0 {
-            return bad(format!("--lever-arm must be ≥ 0, got {}", self.lever_arm_m));
-        }
+        // Every numeric value against the one parameter table (flag, value and range in the refusal).
+        super::params::validate(self)?;
         if self.windows_m.is_empty() {
             return bad("--window needs at least one size in metres".into());
-        }
-        for &w in &self.windows_m {
-            positive("--window", w)?;
-        }
-        if !(0.0..1.0).contains(&self.overlap) {
-            return bad(format!(
-                "--overlap is a fraction in [0, 1), got {}",
-                self.overlap
-            ));
         }
         if let (Some(a), Some(b)) = (self.t_start, self.t_end) {
             if a >= b {
                 return bad(format!("--t-start ({a}) must be before --t-end ({b})"));
-            }
-        }
-        if let Some(dt) = self.time_offset_s {
-            if !dt.is_finite() {
-                return bad("--time-offset must be a finite number of seconds".into());
-            }
-        }
-        let levers = self.estimate_levers.iter().map(|(_, l)| l);
-        for l in levers.chain(self.reference_lever.as_ref()) {
-            let LeverSpec::Offset(l) = l else { continue };
-            if !l.iter().all(|v| v.is_finite()) {
-                return bad(format!(
-                    "a lever arm must be three finite numbers, got {l:?}"
-                ));
             }
         }
         for (n, _) in &self.estimate_levers {

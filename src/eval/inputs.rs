@@ -5,9 +5,10 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::eval::config::{EvalConfig, LeverSpec, NamedInput, TrajectoryInput};
-use crate::sources::text::{read_text, TextOptions};
+use crate::sources::text::{read_text_audited, TextOptions};
 use crate::sources::tf_chain::parse_chain_topic;
 use crate::sources::{ExtractOptions, Progress, Warning};
+use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
 /// A trajectory with what the report says about its origin.
@@ -19,6 +20,8 @@ pub struct Loaded {
     pub type_name: String,
     pub trajectory: Trajectory,
     pub dropped_samples: u64,
+    /// Rows read, dropped per reason, stamps going back.
+    pub rows: RowAudit,
     pub geodetic_origin: Option<[f64; 3]>,
     /// Its lever arm (`--reference-lever` / `--estimate-lever`), `tf-static:` ones resolved.
     pub lever_m: Option<[f64; 3]>,
@@ -116,6 +119,7 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
                     type_name: ex.type_name.clone(),
                     trajectory: ex.trajectory.clone(),
                     dropped_samples: ex.invalid_dropped + ex.duplicate_stamps,
+                    rows: ex.rows,
                     geodetic_origin: ex.geodetic_origin,
                     lever_m: None,
                 }
@@ -206,13 +210,14 @@ fn static_lookup(
 }
 
 fn load_tum(name: &str, path: &Path, text: &TextOptions) -> Result<Loaded> {
-    let (trajectory, format) = read_text(path, text)?;
+    let (trajectory, format, rows) = read_text_audited(path, text)?;
     Ok(Loaded {
         name: name.to_string(),
         label: path.display().to_string(),
         type_name: format.as_str().into(),
         trajectory,
-        dropped_samples: 0,
+        dropped_samples: rows.dropped(),
+        rows,
         geodetic_origin: None,
         lever_m: None,
     })

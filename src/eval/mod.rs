@@ -6,6 +6,7 @@ pub mod export;
 pub mod extrinsics;
 pub mod inputs;
 pub mod parameters;
+pub mod params;
 pub mod preset;
 pub mod sweep;
 
@@ -26,6 +27,15 @@ use crate::sources::{Progress, Warning};
 use config::EvalConfig;
 use inputs::{load, Inputs, Loaded};
 
+/// The longest time span of the loaded trajectories, seconds (what the offset search grids).
+fn data_span_s(inputs: &Inputs) -> f64 {
+    std::iter::once(&inputs.reference)
+        .chain(&inputs.estimates)
+        .filter_map(|t| t.trajectory.span_ns())
+        .map(|(a, b)| (b as f64 - a as f64) * 1e-9)
+        .fold(0.0, f64::max)
+}
+
 /// Every method the offset search runs (the applied one is `EvalConfig::offset_method`).
 pub const OFFSET_METHODS: [OffsetMethod; 3] = crate::align::auto_offset::AUTO_METHODS;
 
@@ -42,6 +52,7 @@ pub fn evaluate_with_inputs(
     progress: Progress<'_>,
 ) -> Result<(Report, Inputs)> {
     config.validate()?;
+    config.check_outputs()?;
     let inputs = load(config, progress)?;
     evaluate_loaded(config, inputs)
 }
@@ -68,6 +79,9 @@ pub fn evaluate_loaded(config: &EvalConfig, mut inputs: Inputs) -> Result<(Repor
     let reference = &inputs.reference;
     for e in &inputs.estimates {
         require_samples(&inputs.path, e)?;
+    }
+    if config.time_offset_s.is_none() {
+        params::check_search_size(config.max_offset_s, config.grid_s, data_span_s(&inputs))?;
     }
     // `--platform auto`: ε and the curvature Δt_max from the reference's own noise and speed.
     let auto = {
@@ -157,6 +171,7 @@ pub fn evaluate_loaded(config: &EvalConfig, mut inputs: Inputs) -> Result<(Repor
             samples: reference.trajectory.len(),
             geodetic_origin: reference.geodetic_origin,
             dropped_samples: reference.dropped_samples,
+            rows: reference.rows,
         },
         estimates,
         warnings,
@@ -396,6 +411,7 @@ fn evaluate_estimate(
             type_name: est.type_name.clone(),
             samples: est.trajectory.len(),
             dropped_samples: est.dropped_samples,
+            rows: est.rows,
             time_offset,
             drift_error: drift,
             extrinsics: None,

@@ -355,6 +355,36 @@ mod tests {
         assert_eq!(p.platform, Some(Platform::Wheeled));
     }
 
+    /// Every numeric parameter has its range in the one table of ranges ([`crate::eval::params`]):
+    /// a numeric parameter added here without a range fails.
+    #[test]
+    fn every_numeric_parameter_has_a_range() {
+        let words = [
+            "stamp",
+            "platform",
+            "lever_correction",
+            "offset_method",
+            "offset_model",
+            "metrics",
+        ];
+        let cmd = Parameters::augment_args(Command::new("t"));
+        for arg in cmd.get_arguments() {
+            let id = arg.get_id().as_str();
+            if words.contains(&id) {
+                continue;
+            }
+            let key = if id == "origin" {
+                "origin_latitude"
+            } else {
+                id
+            };
+            let found = crate::eval::params::PARAMS
+                .iter()
+                .any(|p| p.key().replace(' ', "_") == key);
+            assert!(found, "--{id} has no range in src/eval/params.rs");
+        }
+    }
+
     /// `over` keeps every field: a parameter added to the struct but forgotten in `over` fails here.
     #[test]
     fn over_covers_every_parameter() {

@@ -5,6 +5,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::trajectory::rows::RowAudit;
+
 use crate::sources::Warning;
 
 /// Current report layout version.
@@ -107,6 +109,9 @@ pub struct TopicReport {
     pub geodetic_origin: Option<[f64; 3]>,
     /// Samples dropped as invalid (NO_FIX, NaN) or with a repeated stamp.
     pub dropped_samples: u64,
+    /// Rows read, dropped per reason, stamps going back.
+    #[serde(default)]
+    pub rows: RowAudit,
 }
 
 /// One estimate's results.
@@ -118,6 +123,9 @@ pub struct EstimateReport {
     pub type_name: String,
     pub samples: usize,
     pub dropped_samples: u64,
+    /// Rows read, dropped per reason, stamps going back.
+    #[serde(default)]
+    pub rows: RowAudit,
     pub time_offset: TimeOffsetReport,
     pub drift_error: Vec<DriftErrorReport>,
     /// Known extrinsics applied (`--estimate-lever`/`--reference-lever`): the estimate was moved onto

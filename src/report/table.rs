@@ -3,6 +3,7 @@
 
 use std::fmt::Write;
 
+use crate::report::escape::escape;
 use crate::report::json::Report;
 
 fn pct(v: Option<f64>) -> String {
@@ -16,8 +17,8 @@ pub fn render(report: &Report) -> String {
     let _ = writeln!(
         s,
         "reference {} ({}, {} samples); ε curvature {:.2} m{}, path {:.2} m, Δt_max {} s, lever correction {}",
-        report.reference.topic,
-        report.reference.type_name,
+        escape(&report.reference.topic),
+        escape(&report.reference.type_name),
         report.reference.samples,
         p.curvature_eps_m,
         p.curvature_dt_max_s
@@ -26,13 +27,22 @@ pub fn render(report: &Report) -> String {
         p.dt_max_s,
         p.lever_correction
     );
+    if let Some(rows) = report.reference.rows.describe() {
+        let _ = writeln!(s, "  reference rows: {rows}");
+    }
     for e in &report.estimates {
         let o = &e.time_offset;
         let _ = writeln!(
             s,
             "\nestimate {} ({}, {}, {} samples)",
-            e.name, e.topic, e.type_name, e.samples
+            escape(&e.name),
+            escape(&e.topic),
+            escape(&e.type_name),
+            e.samples
         );
+        if let Some(rows) = e.rows.describe() {
+            let _ = writeln!(s, "  rows: {rows}");
+        }
         let _ = writeln!(
             s,
             "  time offset  {:+.4} s  applied {:+.4} s  method {}  ρ {}  confidence {}  status {}",

@@ -5,7 +5,8 @@
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::sources::mapped_csv::{read_header, read_mapped_csv, CsvMapping};
+use crate::sources::mapped_csv::{read_header, read_mapped_csv_audited, CsvMapping};
+use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
 /// True when the header row is EuRoC's (`p_RS_R_x` among the columns).
@@ -15,6 +16,11 @@ pub fn is_euroc_header(columns: &[String]) -> bool {
 
 /// Reads a EuRoC ground-truth CSV: nanosecond stamps, position, orientation (w first in the file).
 pub fn read_euroc(path: &Path) -> Result<Trajectory> {
+    read_euroc_audited(path).map(|(t, _)| t)
+}
+
+/// [`read_euroc`], and what became of every row.
+pub fn read_euroc_audited(path: &Path) -> Result<(Trajectory, RowAudit)> {
     let head = read_header(path)?;
     if head.columns.len() < 8 {
         return Err(Error::Text {
@@ -24,7 +30,7 @@ pub fn read_euroc(path: &Path) -> Result<Trajectory> {
             hint: "expected EuRoC ground truth: #timestamp [ns], p_RS_R_x, p_RS_R_y, p_RS_R_z, q_RS_w, q_RS_x, q_RS_y, q_RS_z, ...".into(),
         });
     }
-    read_mapped_csv(path, &CsvMapping::euroc())
+    read_mapped_csv_audited(path, &CsvMapping::euroc())
 }
 
 #[cfg(test)]

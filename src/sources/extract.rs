@@ -15,10 +15,12 @@ use crate::error::{Error, Result};
 use crate::sources::recording::ChannelInfo;
 use crate::sources::recording::Recording;
 use crate::sources::tf_chain::{self, ChainRequest, TfCollector};
+use crate::sources::Warning;
 use crate::sources::{
     ExtractOptions, ExtractedTopic, Extraction, Progress, Source, StampSource, StaticTransform,
     TopicInfo,
 };
+use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
 /// Every recording is a [`Source`]: its topics from its channel counts, its trajectories by
@@ -47,6 +49,15 @@ impl<R: Recording> Source for R {
         progress: Progress<'_>,
     ) -> Result<Vec<crate::sources::tf_frames::FramePair>> {
         crate::sources::tf_frames::frame_pairs(self, progress)
+    }
+
+    fn frame_pairs_checked(
+        &self,
+        progress: Progress<'_>,
+    ) -> Result<(Vec<crate::sources::tf_frames::FramePair>, Vec<Warning>)> {
+        let (pairs, truncated_at) = crate::sources::tf_frames::scan(self, progress)?;
+        let warnings = truncated_at.map(|o| self.truncation_warning(o));
+        Ok((pairs, warnings.into_iter().collect()))
     }
 }
 
@@ -287,7 +298,18 @@ pub fn extract(
             Ok(())
         },
     )?;
-    check_requested(path, topics_plain, &outcome.channels)?;
+    check_requested(path, topics_plain, &outcome.channels).map_err(|e| {
+        match (e, outcome.truncated_at) {
+            (Error::TopicNotFound { topic, .. }, Some(offset)) => Error::Damaged {
+                path: path.to_path_buf(),
+                offset,
+                detail: format!(
+                    "the recording is cut short or damaged there, and topic {topic} was not found before"
+                ),
+            },
+            (e, _) => e,
+        }
+    })?;
     check_tf_channels(path, &chains, &outcome.channels)?;
     let tree = tf.map(TfCollector::finish).unwrap_or_default();
     let mut chain_topics = Vec::with_capacity(chains.len());
@@ -309,6 +331,11 @@ pub fn extract(
             messages: c.edges_read,
             invalid_dropped: c.composed.outside_span,
             duplicate_stamps: 0,
+            rows: RowAudit {
+                read: c.edges_read,
+                outside_tf_span: c.composed.outside_span,
+                ..RowAudit::default()
+            },
             geodetic_origin: None,
         });
     }
@@ -334,9 +361,15 @@ pub fn extract(
             .ok_or_else(|| Error::InvalidArgument(format!("{topic}: no readable channel")))
         })
         .collect::<Result<_>>()?;
-    let duplicates: Vec<u64> = accumulators
+    // Invalid samples (NO_FIX, NaN) never reach the trajectory; `clean` counts the rest.
+    let audits: Vec<RowAudit> = accumulators
         .iter_mut()
-        .map(|a| a.trajectory.sort_dedup() as u64)
+        .map(|a| {
+            let mut audit = a.trajectory.clean();
+            audit.read = a.messages;
+            audit.not_finite += a.invalid_dropped;
+            audit
+        })
         .collect();
 
     // The ENU origin: given, or the first valid fix (by stamp) of the first geodetic topic
@@ -351,9 +384,9 @@ pub fn extract(
 
     let mut done: Vec<Option<ExtractedTopic>> = accumulators
         .into_iter()
-        .zip(duplicates)
+        .zip(audits)
         .zip(&unique)
-        .map(|((mut acc, duplicate_stamps), topic)| {
+        .map(|((mut acc, rows), topic)| {
             let mut geodetic_origin = None;
             if acc.kind.is_geodetic() {
                 // `origin` is Some whenever a geodetic topic has a sample.
@@ -369,8 +402,9 @@ pub fn extract(
                 type_name: acc.kind.type_name().to_string(),
                 trajectory: acc.trajectory,
                 messages: acc.messages,
-                invalid_dropped: acc.invalid_dropped,
-                duplicate_stamps,
+                invalid_dropped: rows.not_finite + rows.out_of_range,
+                duplicate_stamps: rows.duplicate_stamp,
+                rows,
                 geodetic_origin,
             })
         })

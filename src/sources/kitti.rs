@@ -12,6 +12,7 @@ use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
 use crate::error::{Error, Result};
 use crate::sources::tum::parse_stamp_ns;
+use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
 /// Frame period assumed when no times file is given (KITTI records at 10 Hz), nanoseconds.
@@ -21,6 +22,11 @@ const HINT: &str = "expected KITTI rows of 12 numbers (a 3x4 pose matrix, row-ma
 
 /// Reads a KITTI pose file, stamped by `times` (a KITTI `times.txt`) when given, else `i · 0.1 s`.
 pub fn read_kitti(path: &Path, times: Option<&Path>) -> Result<Trajectory> {
+    read_kitti_audited(path, times).map(|(t, _)| t)
+}
+
+/// [`read_kitti`], and what became of every row ([`Trajectory::clean`]).
+pub fn read_kitti_audited(path: &Path, times: Option<&Path>) -> Result<(Trajectory, RowAudit)> {
     let stamps = times.map(read_times).transpose()?;
     let mut traj = Trajectory::new(true);
     let mut row = 0usize;
@@ -44,10 +50,20 @@ pub fn read_kitti(path: &Path, times: Option<&Path>) -> Result<Trajectory> {
         row += 1;
         let (m, p) = matrix_of(v);
         if !p.iter().all(|x| x.is_finite()) || !m.iter().all(|x| x.is_finite()) {
+            // Kept as a NaN row so that `clean` counts it as not finite.
+            traj.push(stamp, Vector3::repeat(f64::NAN), None);
             return Ok(());
         }
-        // The matrices are rounded to 7 digits: project onto the nearest rotation.
-        let r = Rotation3::from_matrix(&m);
+        if m.iter().any(|x| x.abs() > 1.5) {
+            // Not a rotation (its entries are within ±1): nalgebra's projection never ends on such a
+            // matrix (a value of 7e17, found by fuzzing). Kept as a row out of range, which `clean`
+            // counts and drops.
+            traj.push(stamp, Vector3::repeat(f64::MAX), None);
+            return Ok(());
+        }
+        // The matrices are rounded to 7 digits: project onto the nearest rotation, in bounded
+        // iterations (`from_matrix` loops until it converges).
+        let r = Rotation3::from_matrix_eps(&m, f64::EPSILON, 100, Rotation3::identity());
         traj.push(stamp, p, Some(UnitQuaternion::from_rotation_matrix(&r)));
         Ok(())
     })?;
@@ -61,8 +77,8 @@ pub fn read_kitti(path: &Path, times: Option<&Path>) -> Result<Trajectory> {
             });
         }
     }
-    traj.sort_dedup();
-    Ok(traj)
+    let audit = traj.clean();
+    Ok((traj, audit))
 }
 
 /// The rows of a KITTI pose file as written: the rotation part unprojected (evo computes with these

@@ -13,6 +13,7 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use crate::error::{Error, Result};
 use crate::sources::tum::parse_stamp_ns;
+use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
 /// The unit of a time column.
@@ -220,6 +221,14 @@ pub fn read_header(path: &Path) -> Result<CsvHeader> {
 /// Reads a CSV trajectory with `mapping`. Rows whose position is not finite are skipped; stamps are
 /// sorted and deduplicated like every source.
 pub fn read_mapped_csv(path: &Path, mapping: &CsvMapping) -> Result<Trajectory> {
+    read_mapped_csv_audited(path, mapping).map(|(t, _)| t)
+}
+
+/// [`read_mapped_csv`], and what became of every row ([`Trajectory::clean`]).
+pub fn read_mapped_csv_audited(
+    path: &Path,
+    mapping: &CsvMapping,
+) -> Result<(Trajectory, RowAudit)> {
     let head = read_header(path)?;
     let header = &head.columns;
     let resolve = |field: &str, c: &Column| -> Result<usize> {
@@ -310,12 +319,10 @@ pub fn read_mapped_csv(path: &Path, mapping: &CsvMapping) -> Result<Trajectory> 
             ))),
             None => None,
         };
-        if p.iter().all(|v| v.is_finite()) {
-            traj.push(stamp, p, q);
-        }
+        traj.push(stamp, p, q);
     }
-    traj.sort_dedup();
-    Ok(traj)
+    let audit = traj.clean();
+    Ok((traj, audit))
 }
 
 /// Writes `traj` as CSV with the header `t,x,y,z,qx,qy,qz,qw` (seconds, stamps printed exactly;

@@ -87,6 +87,8 @@ pub struct ExtractedTopic {
     pub invalid_dropped: u64,
     /// Samples dropped because their stamp repeated the previous one.
     pub duplicate_stamps: u64,
+    /// Every row read, dropped per reason, stamps going back ([`crate::trajectory::rows`]).
+    pub rows: crate::trajectory::rows::RowAudit,
     /// The ENU origin used for a geodetic topic.
     pub geodetic_origin: Option<[f64; 3]>,
 }
@@ -130,5 +132,13 @@ pub trait Source {
     fn frame_pairs(&self, progress: Progress<'_>) -> Result<Vec<tf_frames::FramePair>> {
         let _ = progress;
         Ok(Vec::new())
+    }
+    /// [`Source::frame_pairs`] by a pass over the whole recording, with the warnings that pass raised
+    /// (a recording cut short), so `topics` can say the recording is damaged.
+    fn frame_pairs_checked(
+        &self,
+        progress: Progress<'_>,
+    ) -> Result<(Vec<tf_frames::FramePair>, Vec<Warning>)> {
+        Ok((self.frame_pairs(progress)?, Vec::new()))
     }
 }

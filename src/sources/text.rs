@@ -11,11 +11,12 @@ use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::sources::euroc::{is_euroc_header, read_euroc};
-use crate::sources::kitti::read_kitti;
-use crate::sources::mapped_csv::{read_header, read_mapped_csv, CsvMapping};
-use crate::sources::tum::read_tum;
+use crate::sources::euroc::{is_euroc_header, read_euroc_audited};
+use crate::sources::kitti::read_kitti_audited;
+use crate::sources::mapped_csv::{read_header, read_mapped_csv_audited, CsvMapping};
+use crate::sources::tum::read_tum_audited;
 use crate::sources::{ExtractOptions, ExtractedTopic, Extraction, Progress, Source, TopicInfo};
+use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
 /// A text trajectory format.
@@ -93,14 +94,22 @@ pub fn detect_format(path: &Path) -> Result<TextFormat> {
 
 /// Reads a text trajectory in the format `options` give or [`detect_format`] picks.
 pub fn read_text(path: &Path, options: &TextOptions) -> Result<(Trajectory, TextFormat)> {
+    read_text_audited(path, options).map(|(t, f, _)| (t, f))
+}
+
+/// [`read_text`], and what became of every row (dropped per reason, stamps going back).
+pub fn read_text_audited(
+    path: &Path,
+    options: &TextOptions,
+) -> Result<(Trajectory, TextFormat, RowAudit)> {
     let format = match options.format {
         Some(f) => f,
         None => detect_format(path)?,
     };
     let traj = match format {
-        TextFormat::Tum => read_tum(path)?,
-        TextFormat::Kitti => read_kitti(path, options.kitti_times.as_deref())?,
-        TextFormat::Euroc => read_euroc(path)?,
+        TextFormat::Tum => read_tum_audited(path)?,
+        TextFormat::Kitti => read_kitti_audited(path, options.kitti_times.as_deref())?,
+        TextFormat::Euroc => read_euroc_audited(path)?,
         TextFormat::Csv => {
             let mapping = match &options.csv {
                 Some(m) => m.clone(),
@@ -117,10 +126,10 @@ pub fn read_text(path: &Path, options: &TextOptions) -> Result<(Trajectory, Text
                     })?
                 }
             };
-            read_mapped_csv(path, &mapping)?
+            read_mapped_csv_audited(path, &mapping)?
         }
     };
-    Ok((traj, format))
+    Ok((traj.0, format, traj.1))
 }
 
 /// A text trajectory file as a [`Source`]: one channel, named by the file stem.
@@ -174,7 +183,7 @@ impl Source for TextSource {
         _options: &ExtractOptions,
         progress: Progress<'_>,
     ) -> Result<Extraction> {
-        let (traj, format) = read_text(&self.path, &self.options)?;
+        let (traj, format, rows) = read_text_audited(&self.path, &self.options)?;
         progress(self.size_bytes());
         Ok(Extraction {
             topics: topics
@@ -184,8 +193,9 @@ impl Source for TextSource {
                     type_name: format.as_str().into(),
                     messages: traj.len() as u64,
                     trajectory: traj.clone(),
-                    invalid_dropped: 0,
-                    duplicate_stamps: 0,
+                    invalid_dropped: rows.not_finite + rows.out_of_range,
+                    duplicate_stamps: rows.duplicate_stamp,
+                    rows,
                     geodetic_origin: None,
                 })
                 .collect(),

@@ -34,10 +34,15 @@ pub fn chain_topic(parent: &str, child: &str) -> String {
 
 /// Every frame pair of `rec`'s TF channels, sorted by topic, parent, child.
 pub fn frame_pairs(rec: &dyn Recording, progress: Progress<'_>) -> Result<Vec<FramePair>> {
+    scan(rec, progress).map(|(pairs, _)| pairs)
+}
+
+/// [`frame_pairs`], and where the recording was cut short when it was (the pass reads every record).
+pub fn scan(rec: &dyn Recording, progress: Progress<'_>) -> Result<(Vec<FramePair>, Option<u64>)> {
     let path = rec.path().to_path_buf();
     let mut counts: BTreeMap<(String, String, String), (bool, u64)> = BTreeMap::new();
     let mut index: HashMap<u16, u64> = HashMap::new();
-    rec.pass(&mut |c| is_tf_channel(c), progress, &mut |c, m| {
+    let outcome = rec.pass(&mut |c| is_tf_channel(c), progress, &mut |c, m| {
         let i = index.entry(c.id).or_default();
         let edges = decode_edges(&path, c, *i, m.data)?;
         *i += 1;
@@ -51,7 +56,7 @@ pub fn frame_pairs(rec: &dyn Recording, progress: Progress<'_>) -> Result<Vec<Fr
         }
         Ok(())
     })?;
-    Ok(counts
+    let pairs = counts
         .into_iter()
         .map(|((topic, parent, child), (is_static, count))| FramePair {
             chain: chain_topic(&parent, &child),
@@ -61,7 +66,8 @@ pub fn frame_pairs(rec: &dyn Recording, progress: Progress<'_>) -> Result<Vec<Fr
             is_static,
             count,
         })
-        .collect())
+        .collect();
+    Ok((pairs, outcome.truncated_at))
 }
 
 /// The root → leaf chains of the tree `pairs` form that cross at least one `/tf` edge (a chain of

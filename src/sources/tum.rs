@@ -9,17 +9,24 @@ use std::path::Path;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use crate::error::{Error, Result};
+use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
 /// Reads a TUM file. Lines with 4 values (`t x y z`) give a position-only trajectory; 8 values add the
 /// orientation. Stamps are parsed as seconds and rounded to the nanosecond.
 pub fn read_tum(path: &Path) -> Result<Trajectory> {
-    let mut t = read_tum_rows(path)?;
-    t.sort_dedup();
-    Ok(t)
+    read_tum_audited(path).map(|(t, _)| t)
 }
 
-/// Reads a TUM file like [`read_tum`] but keeps the rows as written (no sorting, repeated stamps
+/// [`read_tum`], and what became of every row ([`Trajectory::clean`]: sorted, repeated stamps and rows
+/// not finite dropped and counted).
+pub fn read_tum_audited(path: &Path) -> Result<(Trajectory, RowAudit)> {
+    let mut t = read_tum_rows(path)?;
+    let audit = t.clean();
+    Ok((t, audit))
+}
+
+/// Reads a TUM file but keeps the rows as written (no sorting, repeated stamps and rows not finite
 /// kept): evo's readers do so, and `trajdrift ape`/`rpe` must pair the same poses to give its numbers.
 pub fn read_tum_rows(path: &Path) -> Result<Trajectory> {
     read_tum_rows_with(path, true)
@@ -74,9 +81,6 @@ pub fn read_tum_rows_with(path: &Path, orientation: bool) -> Result<Trajectory> 
             .flatten()
             .ok_or_else(|| bad("bad timestamp".into()))?;
         let p = Vector3::new(vals[1], vals[2], vals[3]);
-        if !p.iter().all(|v| v.is_finite()) {
-            continue;
-        }
         let q = (n == 8 && orientation).then(|| {
             UnitQuaternion::from_quaternion(Quaternion::new(vals[7], vals[4], vals[5], vals[6]))
         });

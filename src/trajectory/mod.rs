@@ -5,6 +5,7 @@
 //! sub-microsecond resolution over missions of days.
 
 pub mod extrinsics;
+pub mod rows;
 pub mod tf_compose;
 
 use nalgebra::{UnitQuaternion, Vector3};

@@ -79,7 +79,7 @@ pub fn run(a: BatchArgs) -> Result<u8> {
         eprintln!("warning [weak_time_offset]: mission {w}: an estimate's offset is weak");
     }
     if !a.quiet {
-        print!("{}", s.to_markdown());
+        crate::cli::emit(&s.to_markdown())?;
         eprintln!(
             "{} missions ({} kept from an earlier run), {} failed; results in {}",
             s.missions,

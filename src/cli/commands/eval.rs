@@ -8,7 +8,7 @@ use trajdrift::eval::evaluate_with_inputs;
 use trajdrift::eval::parameters::Parameters;
 use trajdrift::eval::preset::Preset;
 use trajdrift::plot::{PictureOutputs, PlotFormat};
-use trajdrift::report::{output::write_output, table};
+use trajdrift::report::table;
 
 use crate::cli::args::{text_options, EvalArgs, PlotFormatArg};
 use crate::cli::progress::ReadProgress;
@@ -105,8 +105,12 @@ pub fn run(a: EvalArgs) -> Result<u8> {
     let (config, notes) = config_from_args(&a)?;
     if !a.quiet {
         for n in &notes {
-            eprintln!("note: {n}");
+            eprintln!("note: {}", trajdrift::report::escape::escape(n));
         }
+    }
+    let guard = config.output_guard();
+    if let Some(out) = &a.json {
+        guard.check("--json", out)?;
     }
     if let Some(out) = &a.annotate {
         // Refuse before the evaluation pass rather than after it.
@@ -147,13 +151,13 @@ pub fn run(a: EvalArgs) -> Result<u8> {
     if let Some(path) = &a.json {
         let mut bytes = serde_json::to_vec_pretty(&report)?;
         bytes.push(b'\n');
-        write_output(path, &bytes)?;
+        guard.write("--json", path, &bytes)?;
     }
     if !a.quiet && !json_to_stdout {
-        print!("{}", table::render(&report));
+        crate::cli::emit(&table::render(&report))?;
     }
     for w in &report.warnings {
-        eprintln!("warning [{}]: {}", w.code, w.message);
+        crate::cli::warn(&w.code, &w.message);
     }
     Ok(if report.warnings.is_empty() {
         EXIT_OK

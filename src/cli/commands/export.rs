@@ -3,7 +3,7 @@
 
 use anyhow::{anyhow, Result};
 
-use trajdrift::report::output::write_output;
+use trajdrift::report::output::OutputGuard;
 use trajdrift::sources::mapped_csv::write_csv;
 use trajdrift::sources::open::is_recording;
 use trajdrift::sources::text::TextSource;
@@ -21,6 +21,14 @@ pub fn run(mut a: ExportArgs) -> Result<u8> {
         )));
     }
     a.out = a.recording.pop().unwrap_or_default();
+    // Refused before the pass, and again when written.
+    let guard = OutputGuard::new(
+        a.recording
+            .iter()
+            .cloned()
+            .chain(a.text.kitti_times.clone()),
+    );
+    guard.check("OUT", &a.out)?;
     let first = &a.recording[0];
     let (source, topic): (Box<dyn Source>, String) = if a.recording.len() > 1 || is_recording(first)
     {
@@ -52,9 +60,9 @@ pub fn run(mut a: ExportArgs) -> Result<u8> {
         ExportFormatArg::Tum => write_tum(&mut bytes, traj)?,
         ExportFormatArg::Csv => write_csv(&mut bytes, traj)?,
     }
-    write_output(&a.out, &bytes)?;
+    guard.write("OUT", &a.out, &bytes)?;
     for w in &extraction.warnings {
-        eprintln!("warning [{}]: {}", w.code, w.message);
+        crate::cli::warn(&w.code, &w.message);
     }
     Ok(EXIT_OK)
 }

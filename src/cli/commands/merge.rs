@@ -19,7 +19,7 @@ pub fn run(a: MergeArgs) -> Result<u8> {
     })?;
     summary.write(&out)?;
     if !a.quiet {
-        print!("{}", summary.to_markdown());
+        crate::cli::emit(&summary.to_markdown())?;
     }
     for f in &summary.failed {
         eprintln!("error: mission {}: {}", f.mission, f.error);

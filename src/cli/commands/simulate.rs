@@ -1,9 +1,9 @@
 //! `trajdrift simulate`: write a simulated mission with known truth (the project's own fixtures and the
 //! memory benchmark's large recordings come from here).
 
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, Result};
 
-use trajdrift::report::output::write_output;
+use trajdrift::report::output::{write_output, AtomicFile};
 use trajdrift::simulate::writer::{truth_json, write_mcap};
 use trajdrift::simulate::{default_route, simulate, MissionConfig};
 
@@ -63,17 +63,10 @@ pub fn run(a: SimulateArgs) -> Result<u8> {
     if a.grandtour {
         return grandtour(&a, &mission, bulk_bytes);
     }
-    let tmp = a
-        .out
-        .with_extension(format!("mcap.{}.tmp", std::process::id()));
-    let file =
-        std::fs::File::create(&tmp).with_context(|| format!("{}: cannot create", tmp.display()))?;
-    let written = write_mcap(std::io::BufWriter::new(file), &mission, bulk_bytes);
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e.into());
-    }
-    std::fs::rename(&tmp, &a.out).with_context(|| format!("{}: cannot write", a.out.display()))?;
+    let mut target = AtomicFile::create(&a.out)?;
+    let file = target.file().try_clone()?;
+    write_mcap(std::io::BufWriter::new(file), &mission, bulk_bytes)?;
+    target.commit()?;
     if let Some(path) = &a.truth {
         let mut bytes = serde_json::to_vec_pretty(&truth_json(&mission))?;
         bytes.push(b'\n');

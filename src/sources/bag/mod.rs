@@ -57,7 +57,8 @@ impl BagSource {
         }
         let mut header = Vec::new();
         let mut r = BufReader::new(file);
-        let index_pos = match records::read_record(&mut r, &mut header, path)? {
+        let remaining = size.saturating_sub(MAGIC.len() as u64);
+        let index_pos = match records::read_record(&mut r, &mut header, path, remaining)? {
             Next::Record { .. } => {
                 let f = Fields::parse(&header).map_err(|d| corrupt(path, d))?;
                 if f.op() != Some(op::BAG_HEADER) {
@@ -86,9 +87,16 @@ impl BagSource {
         let mut conns = HashMap::new();
         let mut counts: HashMap<u32, u64> = HashMap::new();
         let (mut header, mut data) = (Vec::new(), Vec::new());
-        while let Next::Record { data_len } =
-            records::read_record(&mut r, &mut header, &self.path).ok()?
+        let mut pos = self.index_pos;
+        while let Next::Record { data_len } = records::read_record(
+            &mut r,
+            &mut header,
+            &self.path,
+            self.size.saturating_sub(pos),
+        )
+        .ok()?
         {
+            pos += 8 + header.len() as u64 + data_len as u64;
             data.resize(data_len as usize, 0);
             r.read_exact(&mut data).ok()?;
             let f = Fields::parse(&header).ok()?;
@@ -203,28 +211,48 @@ fn connection(
     })
 }
 
-/// Decompresses a chunk's data into `out`.
+/// The largest chunk trajdrift decompresses (rosbag's default chunk is 768 KiB).
+const MAX_CHUNK: usize = 256 << 20;
+
+/// Decompresses a chunk's data into `out`: never more than the `size` the chunk header declares (a
+/// compressed bomb or a damaged stream stops there), and a declared size over [`MAX_CHUNK`] is damage.
 fn decompress(
     compression: &[u8],
     data: &[u8],
     size: usize,
     out: &mut Vec<u8>,
 ) -> std::io::Result<()> {
+    use std::io::{Error as IoError, ErrorKind};
     out.clear();
-    // `size` comes from the file: reserve no more than a sane chunk before the data proves it.
-    out.reserve(size.min(256 << 20));
+    if size > MAX_CHUNK {
+        return Err(IoError::new(
+            ErrorKind::InvalidData,
+            format!("declares {size} bytes uncompressed, more than {MAX_CHUNK}"),
+        ));
+    }
+    out.reserve(size);
+    let limit = size as u64 + 1;
     match compression {
         b"bz2" => bzip2::read::BzDecoder::new(data)
+            .take(limit)
             .read_to_end(out)
             .map(|_| ()),
         b"lz4" => lz4_flex::frame::FrameDecoder::new(data)
+            .take(limit)
             .read_to_end(out)
             .map(|_| ()),
         _ => {
             out.extend_from_slice(data);
             Ok(())
         }
+    }?;
+    if out.len() > size && compression != b"none" {
+        return Err(IoError::new(
+            ErrorKind::InvalidData,
+            format!("decompresses to more than the {size} bytes it declares"),
+        ));
     }
+    Ok(())
 }
 
 impl Recording for BagSource {
@@ -269,13 +297,17 @@ impl Recording for BagSource {
         let mut pos = MAGIC.len() as u64;
         let mut last_progress = 0;
         loop {
-            if self.index_pos > 0 && pos >= self.index_pos {
-                break; // the index only repeats connections
-            }
-            let data_len = match records::read_record(&mut r, &mut header, path)? {
+            // Read up to the end of the file, not to `index_pos`: the index only repeats connections
+            // (already seen ones are skipped), and a damaged `index_pos` must not hide the data.
+            let data_len = match records::read_record(
+                &mut r,
+                &mut header,
+                path,
+                self.size.saturating_sub(pos),
+            )? {
                 Next::End => break,
                 Next::Truncated => {
-                    out.truncated_at = Some(self.size);
+                    out.truncated_at = Some(pos);
                     break;
                 }
                 Next::Record { data_len } => data_len,
@@ -296,7 +328,7 @@ impl Recording for BagSource {
             data.resize(data_len as usize, 0);
             let n = records::read_full(&mut r, &mut data).map_err(|e| Error::io(path, e))?;
             if n < data.len() {
-                out.truncated_at = Some(self.size);
+                out.truncated_at = Some(record_start);
                 break;
             }
             if f.op() == Some(op::CHUNK) {

@@ -142,11 +142,14 @@ pub enum Next {
 }
 
 /// Reads the next top-level record's header into `header` (the caller then reads or skips
-/// `data_len` bytes).
+/// `data_len` bytes). `remaining` is how many bytes the file holds from the record's start: a header
+/// or data length past it is a file cut short ([`Next::Truncated`]), found before anything is
+/// allocated, so a length field of 0xFFFFFFFF never costs 4 GB.
 pub fn read_record<R: Read>(
     r: &mut R,
     header: &mut Vec<u8>,
     path: &std::path::Path,
+    remaining: u64,
 ) -> Result<Next> {
     let mut len = [0u8; 4];
     match read_full(r, &mut len).map_err(|e| Error::io(path, e))? {
@@ -161,6 +164,9 @@ pub fn read_record<R: Read>(
             detail: format!("record header of {hlen} bytes"),
         });
     }
+    if 8 + hlen as u64 > remaining {
+        return Ok(Next::Truncated);
+    }
     header.resize(hlen as usize, 0);
     if read_full(r, header).map_err(|e| Error::io(path, e))? < header.len() {
         return Ok(Next::Truncated);
@@ -168,9 +174,11 @@ pub fn read_record<R: Read>(
     if read_full(r, &mut len).map_err(|e| Error::io(path, e))? < 4 {
         return Ok(Next::Truncated);
     }
-    Ok(Next::Record {
-        data_len: u32::from_le_bytes(len),
-    })
+    let data_len = u32::from_le_bytes(len);
+    if 8 + hlen as u64 + data_len as u64 > remaining {
+        return Ok(Next::Truncated);
+    }
+    Ok(Next::Record { data_len })
 }
 
 /// Reads until `buf` is full or the input ends; returns the bytes read.

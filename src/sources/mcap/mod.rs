@@ -4,6 +4,7 @@
 //! [`stream`] is the single streaming pass everything is built on, [`summary`] the optional index at
 //! the end of the file; this file turns selected channels into trajectories.
 
+pub mod lengths;
 pub mod stream;
 pub mod summary;
 

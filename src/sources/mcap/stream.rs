@@ -11,6 +11,7 @@ use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
 
+use super::lengths::check_record;
 use mcap::records::{op, Record};
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use mcap::McapError;
@@ -110,6 +111,9 @@ where
                     on_message(&out.channels[index], &message)?;
                 }
                 op::SCHEMA => {
+                    check_record(opcode, data).map_err(|d| {
+                        corrupt(format!("schema record before byte {}: {d}", out.bytes_read))
+                    })?;
                     if let Ok(Record::Schema { header, data }) = mcap::parse_record(opcode, data) {
                         schemas.entry(header.id).or_insert((
                             header.name,
@@ -119,6 +123,12 @@ where
                     }
                 }
                 op::CHANNEL => {
+                    check_record(opcode, data).map_err(|d| {
+                        corrupt(format!(
+                            "channel record before byte {}: {d}",
+                            out.bytes_read
+                        ))
+                    })?;
                     let Record::Channel(c) = mcap::parse_record(opcode, data)
                         .map_err(|e| corrupt(format!("channel record: {e}")))?
                     else {
@@ -182,7 +192,9 @@ pub(crate) fn read_magic(file: &mut std::fs::File, path: &Path) -> Result<[u8; 8
     if got < magic.len() || magic[..] != *mcap::MAGIC {
         return Err(Error::NotMcap {
             path: path.to_path_buf(),
-            detail: if got < magic.len() {
+            detail: if got == 0 {
+                "the file is empty (0 bytes)".into()
+            } else if got < magic.len() {
                 format!("{got} bytes, shorter than the 8-byte magic")
             } else {
                 "the file does not start with the MCAP magic".into()

@@ -25,6 +25,9 @@ pub struct SummaryInfo {
 /// sans-io summary reader: `None` when there is none or it cannot be read. Shared by the source and the
 /// annotated-copy writer.
 pub fn read_mcap_summary(path: &Path) -> Option<mcap::Summary> {
+    // Every length inside the summary's records checked first (the crate trusts them): a damaged
+    // summary reads as none, and the streaming pass (which checks each record too) names the damage.
+    super::lengths::check_summary(path, 64 << 20).ok()?;
     let mut file = std::fs::File::open(path).ok()?;
     let size = file.metadata().ok()?.len();
     let mut reader = SummaryReader::new_with_options(
