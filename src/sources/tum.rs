@@ -36,12 +36,35 @@ const CHUNK: usize = 1 << 20;
 /// chunk as bytes (no line copy, no UTF-8 pass: fields are ASCII numbers, anything else is reported
 /// as not a number); a partial last line moves to the front of the buffer for the next read.
 pub fn read_tum_rows_with(path: &Path, orientation: bool) -> Result<Trajectory> {
+    let (mut traj, quats) = read_rows(path, orientation, false)?;
+    traj.orientations = quats.map(TumOrientations::into_quaternions);
+    Ok(traj)
+}
+
+/// [`read_tum_rows_with`], the orientations apart and kept as the file's decimal digits when every
+/// row allows ([`DecimalQuaternions`]: half the memory of a million quaternions).
+pub fn read_tum_rows_compact(
+    path: &Path,
+    orientation: bool,
+) -> Result<(Trajectory, Option<TumOrientations>)> {
+    read_rows(path, orientation, true)
+}
+
+/// Reads the rows: the trajectory without orientations, and the orientations (decimal digits when
+/// `compact` and every row allows).
+fn read_rows(
+    path: &Path,
+    orientation: bool,
+    compact: bool,
+) -> Result<(Trajectory, Option<TumOrientations>)> {
     let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut rows = RowReader {
         path,
         orientation,
+        compact,
         line: 0,
         traj: None,
+        quats: None,
     };
     let mut buf = vec![0u8; CHUNK];
     let mut filled = 0usize;
@@ -60,8 +83,85 @@ pub fn read_tum_rows_with(path: &Path, orientation: bool) -> Result<Trajectory> 
         buf.copy_within(end..filled, 0);
         filled -= end;
         if n == 0 {
-            return Ok(rows.traj.unwrap_or_default());
+            return Ok((rows.traj.unwrap_or_default(), rows.quats));
         }
+    }
+}
+
+/// The orientations of a TUM file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TumOrientations {
+    /// As written (`qx qy qz qw` decimals with one number of fraction digits, at most 9).
+    Decimal(DecimalQuaternions),
+    /// Parsed.
+    Quaternions(Vec<UnitQuaternion<f64>>),
+}
+
+impl TumOrientations {
+    /// The unit quaternions.
+    pub fn into_quaternions(self) -> Vec<UnitQuaternion<f64>> {
+        match self {
+            TumOrientations::Decimal(d) => (0..d.digits.len()).map(|i| d.get(i)).collect(),
+            TumOrientations::Quaternions(q) => q,
+        }
+    }
+
+    /// Appends a row's orientation: its plain fields (see [`Field`]) when it has them, and the parsed
+    /// quaternion; the first row that does not fit the digits turns them into quaternions.
+    fn push(&mut self, fields: Option<[Option<(bool, u64, usize)>; 4]>, q: UnitQuaternion<f64>) {
+        if let TumOrientations::Decimal(d) = self {
+            match fields.and_then(|f| d.encode(f)) {
+                Some(e) => return d.digits.push(e),
+                None => *self = TumOrientations::Quaternions(self.clone().into_quaternions()),
+            }
+        }
+        if let TumOrientations::Quaternions(v) = self {
+            v.push(q);
+        }
+    }
+}
+
+/// Quaternions as the file's decimals: each component `±m / 10^frac` (sign in the lowest bit, so
+/// `-0.0` stays), one `frac` for the file. [`DecimalQuaternions::get`] gives the very quaternion the
+/// parser gives (same division, same normalisation) from 16 bytes a row instead of 32.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DecimalQuaternions {
+    /// `qx qy qz qw` of each row, `m << 1 | negative`.
+    pub digits: Vec<[u32; 4]>,
+    /// Fraction digits of every component.
+    pub frac: usize,
+}
+
+impl DecimalQuaternions {
+    /// The unit quaternion of row `i`.
+    pub fn get(&self, i: usize) -> UnitQuaternion<f64> {
+        let v = self.digits[i].map(|e| decimal(e & 1 == 1, u64::from(e >> 1), self.frac));
+        UnitQuaternion::from_quaternion(Quaternion::new(v[3], v[0], v[1], v[2]))
+    }
+
+    /// The row's digits, when all four fit and have the file's fraction digits.
+    fn encode(&self, fields: [Option<(bool, u64, usize)>; 4]) -> Option<[u32; 4]> {
+        let mut out = [0u32; 4];
+        for (o, f) in out.iter_mut().zip(fields) {
+            let (neg, m, _) = f.filter(|f| f.2 == self.frac && f.1 < 1 << 31)?;
+            *o = (m as u32) << 1 | u32::from(neg);
+        }
+        Some(out)
+    }
+}
+
+/// `±m / 10^frac` as the parser computes it (Clinger's fast path: exact operands, one correctly
+/// rounded division), for `m ≤ 2^53` and `frac ≤ 22`.
+fn decimal(neg: bool, m: u64, frac: usize) -> f64 {
+    const POW10: [f64; 23] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+        1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+    ];
+    let v = m as f64 / POW10[frac];
+    if neg {
+        -v
+    } else {
+        v
     }
 }
 
@@ -79,8 +179,11 @@ fn read_some(file: &mut std::fs::File, buf: &mut [u8]) -> std::io::Result<usize>
 struct RowReader<'p> {
     path: &'p Path,
     orientation: bool,
+    /// Keep orientations as decimal digits while every row allows.
+    compact: bool,
     line: usize,
     traj: Option<Trajectory>,
+    quats: Option<TumOrientations>,
 }
 
 impl RowReader<'_> {
@@ -110,6 +213,7 @@ impl RowReader<'_> {
             detail,
         };
         let mut vals = [0.0f64; 8];
+        let mut plain = [None; 8];
         let mut n = 0usize;
         let mut stamp_ns = None;
         let mut k = 0usize;
@@ -130,6 +234,7 @@ impl RowReader<'_> {
             })?;
             if n < 8 {
                 vals[n] = v;
+                plain[n] = f.plain;
             }
             n += 1;
         }
@@ -137,7 +242,18 @@ impl RowReader<'_> {
             return Err(bad(format!("{n} values on the line")));
         }
         let with_q = n == 8 && self.orientation;
-        let t = self.traj.get_or_insert_with(|| Trajectory::new(with_q));
+        if self.traj.is_none() {
+            self.quats = with_q.then(|| match plain[4] {
+                Some((_, _, frac)) if self.compact && frac <= 9 => {
+                    TumOrientations::Decimal(DecimalQuaternions {
+                        digits: Vec::new(),
+                        frac,
+                    })
+                }
+                _ => TumOrientations::Quaternions(Vec::new()),
+            });
+        }
+        let t = self.traj.get_or_insert_with(|| Trajectory::new(false));
         let stamp_ns = stamp_ns
             .flatten()
             .ok_or_else(|| bad("bad timestamp".into()))?;
@@ -145,10 +261,16 @@ impl RowReader<'_> {
         if !p.iter().all(|v| v.is_finite()) {
             return Ok(());
         }
-        let q = with_q.then(|| {
-            UnitQuaternion::from_quaternion(Quaternion::new(vals[7], vals[4], vals[5], vals[6]))
-        });
-        t.push(stamp_ns, p, q);
+        t.push(stamp_ns, p, None);
+        if let Some(quats) = self.quats.as_mut() {
+            let q = if with_q {
+                UnitQuaternion::from_quaternion(Quaternion::new(vals[7], vals[4], vals[5], vals[6]))
+            } else {
+                UnitQuaternion::identity()
+            };
+            let fields = with_q.then(|| [plain[4], plain[5], plain[6], plain[7]]);
+            quats.push(fields, q);
+        }
         Ok(())
     }
 }
@@ -166,15 +288,8 @@ impl Field<'_> {
     /// doubles and one correctly rounded division, the same double `str::parse` gives, at a fraction
     /// of the time (it matters at millions of rows); anything else goes to `str::parse`.
     fn value(&self) -> Option<f64> {
-        const POW10: [f64; 23] = [
-            1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-            1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-        ];
         match self.plain {
-            Some((neg, m, frac)) if m <= 1 << 53 && frac < POW10.len() => {
-                let v = m as f64 / POW10[frac];
-                Some(if neg { -v } else { v })
-            }
+            Some((neg, m, frac)) if m <= 1 << 53 && frac <= 22 => Some(decimal(neg, m, frac)),
             _ => std::str::from_utf8(self.text).ok()?.parse().ok(),
         }
     }
@@ -420,6 +535,32 @@ mod tests {
                 assert_eq!(f.value().map(f64::to_bits), want.map(f64::to_bits), "{s}");
                 assert_eq!(f.stamp_ns(), parse_stamp_ns(&s), "{s}");
             }
+        }
+    }
+
+    #[test]
+    fn decimal_orientations_equal_parsed_ones() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("q.tum");
+        let rows = "1.0 0 0 0 -0.000000000 0.000000000 0.707106781 0.707106781\n\
+                    2.0 1 2 3 0.182574186 -0.365148372 0.547722558 0.730296743\n";
+        for (extra, decimal) in [("", true), ("3.0 1 2 3 0.5 0.5 0.5 0.5\n", false)] {
+            std::fs::write(&path, format!("{rows}{extra}")).unwrap();
+            let (t, q) = read_tum_rows_compact(&path, true).unwrap();
+            let q = q.unwrap();
+            assert_eq!(matches!(q, TumOrientations::Decimal(_)), decimal);
+            let want = read_tum_rows_with(&path, true).unwrap();
+            let bits = |v: &[UnitQuaternion<f64>]| -> Vec<[u64; 4]> {
+                v.iter()
+                    .map(|q| q.coords.as_slice().to_vec())
+                    .map(|c| [0, 1, 2, 3].map(|k| c[k].to_bits()))
+                    .collect()
+            };
+            assert_eq!(t.stamps_ns, want.stamps_ns);
+            assert_eq!(
+                bits(&q.into_quaternions()),
+                bits(&want.orientations.unwrap())
+            );
         }
     }
 
