@@ -157,12 +157,8 @@ fn decimal(neg: bool, m: u64, frac: usize) -> f64 {
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
         1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
     ];
-    let v = m as f64 / POW10[frac];
-    if neg {
-        -v
-    } else {
-        v
-    }
+    // The sign set without a branch (it would wait for the division).
+    f64::from_bits((m as f64 / POW10[frac]).to_bits() | u64::from(neg) << 63)
 }
 
 /// One `read`, retried when interrupted.
@@ -359,6 +355,26 @@ fn digits(b: &[u8], mut i: usize) -> (u64, usize) {
     (m, i)
 }
 
+/// The index of the first separator of `b` from `i` (or its length). Eight bytes at a time over bytes
+/// that cannot be separators (all above `,`: digits, `.`, `-`, letters), as fields mostly are.
+fn field_end(b: &[u8], mut i: usize) -> usize {
+    while let Some(chunk) = b.get(i..i + 8) {
+        let w = u64::from_le_bytes(chunk.try_into().unwrap_or([0; 8]));
+        // The high bit of each byte below 0x2D (exact up to the first such byte; non-ASCII bytes,
+        // never separators, are not flagged).
+        let low = w.wrapping_sub(0x2D2D_2D2D_2D2D_2D2D) & !w & 0x8080_8080_8080_8080;
+        if low != 0 {
+            i += (low.trailing_zeros() / 8) as usize;
+            break;
+        }
+        i += 8;
+    }
+    while i < b.len() && !is_sep(b[i]) {
+        i += 1;
+    }
+    i
+}
+
 /// The next field of `line` from byte `k` (fields are runs between spaces, tabs and commas); with
 /// `parse` false the field is only delimited (its value reads as 0).
 fn next_field<'a>(b: &'a [u8], k: &mut usize, parse: bool) -> Option<Field<'a>> {
@@ -389,9 +405,7 @@ fn next_field<'a>(b: &'a [u8], k: &mut usize, parse: bool) -> Option<Field<'a>> 
         }
         *k = i;
     }
-    while *k < b.len() && !is_sep(b[*k]) {
-        *k += 1;
-    }
+    *k = field_end(b, *k);
     Some(Field {
         text: &b[start..*k],
         plain: plain.or((!parse).then_some((false, 0, 0))),
