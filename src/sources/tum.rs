@@ -108,7 +108,11 @@ impl TumOrientations {
 
     /// Appends a row's orientation: its plain fields (see [`Field`]) when it has them, and the parsed
     /// quaternion; the first row that does not fit the digits turns them into quaternions.
-    fn push(&mut self, fields: Option<[Option<(bool, u64, usize)>; 4]>, q: UnitQuaternion<f64>) {
+    fn push(
+        &mut self,
+        fields: Option<[Option<(bool, u64, usize)>; 4]>,
+        q: impl FnOnce() -> UnitQuaternion<f64>,
+    ) {
         if let TumOrientations::Decimal(d) = self {
             match fields.and_then(|f| d.encode(f)) {
                 Some(e) => return d.digits.push(e),
@@ -116,7 +120,7 @@ impl TumOrientations {
             }
         }
         if let TumOrientations::Quaternions(v) = self {
-            v.push(q);
+            v.push(q());
         }
     }
 }
@@ -208,6 +212,7 @@ impl RowReader<'_> {
             line: self.line,
             detail,
         };
+        let decimal_quats = matches!(self.quats, Some(TumOrientations::Decimal(_)));
         let mut vals = [0.0f64; 8];
         let mut plain = [None; 8];
         let mut n = 0usize;
@@ -217,9 +222,13 @@ impl RowReader<'_> {
             if n == 0 {
                 stamp_ns = Some(f.stamp_ns());
             }
-            // The stamp's double is not used: a plain stamp is a number without the division.
+            // The stamp's double is not used, nor an orientation's while the digits are kept: a plain
+            // field is a number without the division (it is computed from the digits if needed).
             let v = match f.plain {
                 Some(_) if n == 0 => Some(0.0),
+                Some((_, m, frac)) if n >= 4 && decimal_quats && m <= 1 << 53 && frac <= 22 => {
+                    Some(0.0)
+                }
                 _ => f.value(),
             }
             .ok_or_else(|| {
@@ -259,10 +268,18 @@ impl RowReader<'_> {
         }
         t.push(stamp_ns, p, None);
         if let Some(quats) = self.quats.as_mut() {
-            let q = if with_q {
-                UnitQuaternion::from_quaternion(Quaternion::new(vals[7], vals[4], vals[5], vals[6]))
-            } else {
-                UnitQuaternion::identity()
+            // The parsed quaternion, needed only once the digits are given up.
+            let q = || {
+                let v = |k: usize| match plain[k] {
+                    Some((neg, m, frac)) if m <= 1 << 53 && frac <= 22 => decimal(neg, m, frac),
+                    _ => vals[k],
+                };
+                match with_q {
+                    true => {
+                        UnitQuaternion::from_quaternion(Quaternion::new(v(7), v(4), v(5), v(6)))
+                    }
+                    false => UnitQuaternion::identity(),
+                }
             };
             let fields = with_q.then(|| [plain[4], plain[5], plain[6], plain[7]]);
             quats.push(fields, q);
@@ -558,7 +575,11 @@ mod tests {
         let path = dir.path().join("q.tum");
         let rows = "1.0 0 0 0 -0.000000000 0.000000000 0.707106781 0.707106781\n\
                     2.0 1 2 3 0.182574186 -0.365148372 0.547722558 0.730296743\n";
-        for (extra, decimal) in [("", true), ("3.0 1 2 3 0.5 0.5 0.5 0.5\n", false)] {
+        for (extra, decimal) in [
+            ("", true),
+            ("3.0 1 2 3 0.5 0.5 0.5 0.5\n", false),
+            ("3.0 1 2 3 0.100000000 12345678.123456789 1e-3 0.2\n", false),
+        ] {
             std::fs::write(&path, format!("{rows}{extra}")).unwrap();
             let (t, q) = read_tum_rows_compact(&path, true).unwrap();
             let q = q.unwrap();
