@@ -112,11 +112,11 @@ def rows():
 
 
 def generate(n=1_000_000):
-    import numpy as np
     DATA.mkdir(parents=True, exist_ok=True)
     ref, est = DATA / "ref_1M.txt", DATA / "est_1M.txt"
     if ref.exists() and est.exists():
         return ref, est
+    import numpy as np
     rng = np.random.default_rng(11)
     t = 1_700_000_000.0 + np.arange(n) * 0.01
     s = np.arange(n) * 0.01

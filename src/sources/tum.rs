@@ -3,7 +3,7 @@
 //!
 //! Hand-written: the format is one whitespace-separated line per pose and no maintained crate reads it.
 
-use std::io::{BufRead, BufReader, Write};
+use std::io::{Read, Write};
 use std::path::Path;
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
@@ -32,67 +32,272 @@ pub fn read_tum_rows(path: &Path) -> Result<Trajectory> {
     read_tum_rows_with(path, true)
 }
 
+/// Bytes read at once: large enough that read calls cost nothing, small enough that memory does not
+/// grow with the file (a whole-file read would double the peak memory of a million-pose evaluation).
+const CHUNK: usize = 1 << 20;
+
 /// [`read_tum_rows`], reading the orientation columns only when `orientation` is true (a metric on
 /// positions alone then reads a million rows faster and keeps half the memory).
+///
+/// The file is read in chunks of [`CHUNK`] bytes and every whole line is parsed straight from the
+/// chunk as bytes (no line copy, no UTF-8 pass: fields are ASCII numbers, anything else is reported
+/// as not a number); a partial last line moves to the front of the buffer for the next read.
 pub fn read_tum_rows_with(path: &Path, orientation: bool) -> Result<Trajectory> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut reader = BufReader::with_capacity(1 << 16, file);
-    let mut traj: Option<Trajectory> = None;
-    // One reused line buffer and a fixed array of fields: files of millions of poses are read at the
-    // speed of the number parsing, without an allocation per line.
-    let mut buf = String::new();
-    let mut i = 0usize;
+    let (mut traj, quats) = read_rows(path, orientation, false)?;
+    traj.orientations = quats.map(TumOrientations::into_quaternions);
+    Ok(traj)
+}
+
+/// [`read_tum_rows_with`], the orientations apart and kept as the file's decimal digits when every
+/// row allows ([`DecimalQuaternions`]: half the memory of a million quaternions).
+pub fn read_tum_rows_compact(
+    path: &Path,
+    orientation: bool,
+) -> Result<(Trajectory, Option<TumOrientations>)> {
+    read_rows(path, orientation, true)
+}
+
+/// Reads the rows: the trajectory without orientations, and the orientations (decimal digits when
+/// `compact` and every row allows).
+fn read_rows(
+    path: &Path,
+    orientation: bool,
+    compact: bool,
+) -> Result<(Trajectory, Option<TumOrientations>)> {
+    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut rows = RowReader {
+        path,
+        orientation,
+        compact,
+        line: 0,
+        traj: None,
+        quats: None,
+    };
+    let mut buf = vec![0u8; CHUNK];
+    let mut filled = 0usize;
     loop {
-        buf.clear();
-        if reader.read_line(&mut buf).map_err(|e| Error::io(path, e))? == 0 {
-            break;
+        if filled == buf.len() {
+            buf.resize(buf.len() * 2, 0); // a line longer than the buffer
         }
-        i += 1;
-        let line = buf.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
+        let n = read_some(&mut file, &mut buf[filled..]).map_err(|e| Error::io(path, e))?;
+        filled += n;
+        let end = match (n, memchr::memrchr(b'\n', &buf[..filled])) {
+            (0, _) => filled,
+            (_, Some(i)) => i + 1,
+            (_, None) => continue,
+        };
+        rows.lines(&buf[..end])?;
+        buf.copy_within(end..filled, 0);
+        filled -= end;
+        if n == 0 {
+            return Ok((rows.traj.unwrap_or_default(), rows.quats));
+        }
+    }
+}
+
+/// The orientations of a TUM file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TumOrientations {
+    /// As written (`qx qy qz qw` decimals with one number of fraction digits, at most 9).
+    Decimal(DecimalQuaternions),
+    /// Parsed.
+    Quaternions(Vec<UnitQuaternion<f64>>),
+}
+
+impl TumOrientations {
+    /// The unit quaternions.
+    pub fn into_quaternions(self) -> Vec<UnitQuaternion<f64>> {
+        match self {
+            TumOrientations::Decimal(d) => (0..d.digits.len()).map(|i| d.get(i)).collect(),
+            TumOrientations::Quaternions(q) => q,
+        }
+    }
+
+    /// Appends a row's orientation: its plain fields (see [`Field`]) when it has them, and the parsed
+    /// quaternion; the first row that does not fit the digits turns them into quaternions.
+    fn push(
+        &mut self,
+        fields: Option<[Option<(bool, u64, usize)>; 4]>,
+        q: impl FnOnce() -> UnitQuaternion<f64>,
+    ) {
+        if let TumOrientations::Decimal(d) = self {
+            match fields.and_then(|f| d.encode(f)) {
+                Some(e) => return d.digits.push(e),
+                None => *self = TumOrientations::Quaternions(self.clone().into_quaternions()),
+            }
+        }
+        if let TumOrientations::Quaternions(v) = self {
+            v.push(q());
+        }
+    }
+}
+
+/// Quaternions as the file's decimals: each component `±m / 10^frac` (sign in the lowest bit, so
+/// `-0.0` stays), one `frac` for the file. [`DecimalQuaternions::get`] gives the very quaternion the
+/// parser gives (same division, same normalisation) from 16 bytes a row instead of 32.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DecimalQuaternions {
+    /// `qx qy qz qw` of each row, `m << 1 | negative`.
+    pub digits: Vec<[u32; 4]>,
+    /// Fraction digits of every component.
+    pub frac: usize,
+}
+
+impl DecimalQuaternions {
+    /// The unit quaternion of row `i`.
+    pub fn get(&self, i: usize) -> UnitQuaternion<f64> {
+        let v = self.digits[i].map(|e| decimal(e & 1 == 1, u64::from(e >> 1), self.frac));
+        UnitQuaternion::from_quaternion(Quaternion::new(v[3], v[0], v[1], v[2]))
+    }
+
+    /// The row's digits, when all four fit and have the file's fraction digits.
+    fn encode(&self, fields: [Option<(bool, u64, usize)>; 4]) -> Option<[u32; 4]> {
+        let mut out = [0u32; 4];
+        for (o, f) in out.iter_mut().zip(fields) {
+            let (neg, m, _) = f.filter(|f| f.2 == self.frac && f.1 < 1 << 31)?;
+            *o = (m as u32) << 1 | u32::from(neg);
+        }
+        Some(out)
+    }
+}
+
+/// `±m / 10^frac` as the parser computes it (Clinger's fast path: exact operands, one correctly
+/// rounded division), for `m ≤ 2^53` and `frac ≤ 22`.
+fn decimal(neg: bool, m: u64, frac: usize) -> f64 {
+    const POW10: [f64; 23] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+        1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+    ];
+    // The sign set without a branch (it would wait for the division).
+    f64::from_bits((m as f64 / POW10[frac]).to_bits() | u64::from(neg) << 63)
+}
+
+/// One `read`, retried when interrupted.
+fn read_some(file: &mut std::fs::File, buf: &mut [u8]) -> std::io::Result<usize> {
+    loop {
+        match file.read(buf) {
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            r => return r,
+        }
+    }
+}
+
+/// The state of a TUM read: the trajectory so far and the line number for errors.
+struct RowReader<'p> {
+    path: &'p Path,
+    orientation: bool,
+    /// Keep orientations as decimal digits while every row allows.
+    compact: bool,
+    line: usize,
+    traj: Option<Trajectory>,
+    quats: Option<TumOrientations>,
+}
+
+impl RowReader<'_> {
+    /// Parses every line of `bytes` (whole lines; the last may lack its newline at the end of file).
+    fn lines(&mut self, bytes: &[u8]) -> Result<()> {
+        let mut start = 0;
+        for nl in memchr::memchr_iter(b'\n', bytes) {
+            self.row(&bytes[start..nl])?;
+            start = nl + 1;
+        }
+        if start < bytes.len() {
+            self.row(&bytes[start..])?;
+        }
+        Ok(())
+    }
+
+    /// Parses one line: 4 values (`t x y z`) or 8 (with `qx qy qz qw`); comments and blank lines skipped.
+    fn row(&mut self, line: &[u8]) -> Result<()> {
+        self.line += 1;
+        let line = line.trim_ascii();
+        if line.is_empty() || line[0] == b'#' {
+            return Ok(());
         }
         let bad = |detail: String| Error::TextFormat {
-            path: path.to_path_buf(),
-            line: i,
+            path: self.path.to_path_buf(),
+            line: self.line,
             detail,
         };
+        let decimal_quats = matches!(self.quats, Some(TumOrientations::Decimal(_)));
         let mut vals = [0.0f64; 8];
+        let mut plain = [None; 8];
         let mut n = 0usize;
         let mut stamp_ns = None;
         let mut k = 0usize;
-        while let Some(f) = next_field(line, &mut k, orientation || n < 4) {
-            let v = f
-                .value()
-                .ok_or_else(|| bad(format!("`{}` is not a number", f.text)))?;
+        while let Some(f) = next_field(line, &mut k, self.orientation || n < 4) {
             if n == 0 {
                 stamp_ns = Some(f.stamp_ns());
             }
+            // The stamp's double is not used, nor an orientation's while the digits are kept: a plain
+            // field is a number without the division (it is computed from the digits if needed).
+            let v = match f.plain {
+                Some(_) if n == 0 => Some(0.0),
+                Some((_, m, frac)) if n >= 4 && decimal_quats && m <= 1 << 53 && frac <= 22 => {
+                    Some(0.0)
+                }
+                _ => f.value(),
+            }
+            .ok_or_else(|| {
+                bad(format!(
+                    "`{}` is not a number",
+                    String::from_utf8_lossy(f.text)
+                ))
+            })?;
             if n < 8 {
                 vals[n] = v;
+                plain[n] = f.plain;
             }
             n += 1;
         }
         if n != 8 && n != 4 {
             return Err(bad(format!("{n} values on the line")));
         }
-        let t = traj.get_or_insert_with(|| Trajectory::new(n == 8 && orientation));
+        let with_q = n == 8 && self.orientation;
+        if self.traj.is_none() {
+            self.quats = with_q.then(|| match plain[4] {
+                Some((_, _, frac)) if self.compact && frac <= 9 => {
+                    TumOrientations::Decimal(DecimalQuaternions {
+                        digits: Vec::new(),
+                        frac,
+                    })
+                }
+                _ => TumOrientations::Quaternions(Vec::new()),
+            });
+        }
+        let t = self.traj.get_or_insert_with(|| Trajectory::new(false));
         let stamp_ns = stamp_ns
             .flatten()
             .ok_or_else(|| bad("bad timestamp".into()))?;
         let p = Vector3::new(vals[1], vals[2], vals[3]);
-        let q = (n == 8 && orientation).then(|| {
-            UnitQuaternion::from_quaternion(Quaternion::new(vals[7], vals[4], vals[5], vals[6]))
-        });
-        t.push(stamp_ns, p, q);
+        // Rows not finite are kept: `Trajectory::clean` counts and drops them (`read_tum`), and
+        // evo's readers keep them too (`read_tum_rows`).
+        t.push(stamp_ns, p, None);
+        if let Some(quats) = self.quats.as_mut() {
+            // The parsed quaternion, needed only once the digits are given up.
+            let q = || {
+                let v = |k: usize| match plain[k] {
+                    Some((neg, m, frac)) if m <= 1 << 53 && frac <= 22 => decimal(neg, m, frac),
+                    _ => vals[k],
+                };
+                match with_q {
+                    true => {
+                        UnitQuaternion::from_quaternion(Quaternion::new(v(7), v(4), v(5), v(6)))
+                    }
+                    false => UnitQuaternion::identity(),
+                }
+            };
+            let fields = with_q.then(|| [plain[4], plain[5], plain[6], plain[7]]);
+            quats.push(fields, q);
+        }
+        Ok(())
     }
-    Ok(traj.unwrap_or_default())
 }
 
 /// One field of a line, scanned once: its text and, when it is a plain decimal (`-12.345678`, at
 /// most 19 digits), its digits as an integer and the number of fraction digits.
 struct Field<'a> {
-    text: &'a str,
+    text: &'a [u8],
     /// (negative, digits, fraction digits).
     plain: Option<(bool, u64, usize)>,
 }
@@ -102,16 +307,9 @@ impl Field<'_> {
     /// doubles and one correctly rounded division, the same double `str::parse` gives, at a fraction
     /// of the time (it matters at millions of rows); anything else goes to `str::parse`.
     fn value(&self) -> Option<f64> {
-        const POW10: [f64; 23] = [
-            1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-            1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-        ];
         match self.plain {
-            Some((neg, m, frac)) if m <= 1 << 53 && frac < POW10.len() => {
-                let v = m as f64 / POW10[frac];
-                Some(if neg { -v } else { v })
-            }
-            _ => self.text.parse().ok(),
+            Some((neg, m, frac)) if m <= 1 << 53 && frac <= 22 => Some(decimal(neg, m, frac)),
+            _ => std::str::from_utf8(self.text).ok()?.parse().ok(),
         }
     }
 
@@ -122,53 +320,118 @@ impl Field<'_> {
             Some((false, m, frac)) if frac <= 9 => i64::try_from(m)
                 .ok()?
                 .checked_mul(10i64.pow(9 - frac as u32)),
-            _ => parse_stamp_ns(self.text),
+            _ => parse_stamp_ns(std::str::from_utf8(self.text).ok()?),
         }
     }
 }
 
+/// Field separators: spaces, tabs, commas (and a CR left by a CRLF line).
+fn is_sep(c: u8) -> bool {
+    c == b' ' || c == b'\t' || c == b',' || c == b'\r'
+}
+
+/// The digits of `b` from `i`: (their value, wrapping past 19 digits; the index after them).
+///
+/// Eight bytes at a time while the line has them (SWAR, as simdjson and fast_float do: two masks find
+/// how many leading bytes are digits, three multiplications add them up), byte by byte at its end.
+/// Hand-written: the crates that do this parse a whole float, and the caller needs the digits.
+fn digits(b: &[u8], mut i: usize) -> (u64, usize) {
+    const POW10: [u64; 9] = [
+        1,
+        10,
+        100,
+        1_000,
+        10_000,
+        100_000,
+        1_000_000,
+        10_000_000,
+        100_000_000,
+    ];
+    const ZEROS: u64 = 0x3030_3030_3030_3030;
+    const HIGH: u64 = 0xF0F0_F0F0_F0F0_F0F0;
+    let mut m = 0u64;
+    while let Some(chunk) = b.get(i..i + 8) {
+        let w = u64::from_le_bytes(chunk.try_into().unwrap_or([0; 8]));
+        // A byte is a digit when its high nibble is 3 before and after adding 6; a carry out of a
+        // byte only disturbs the bytes after the first non-digit, which are not counted.
+        let not_digit =
+            ((w & HIGH) ^ ZEROS) | ((w.wrapping_add(0x0606_0606_0606_0606) & HIGH) ^ ZEROS);
+        let c = (not_digit.trailing_zeros() / 8) as usize;
+        if c == 0 {
+            return (m, i);
+        }
+        // The c digits moved to the top bytes (zeros before them), then summed pairwise.
+        let v = (w.wrapping_sub(ZEROS)) << (8 * (8 - c));
+        let v = (v.wrapping_mul(10) + (v >> 8)) & 0x00FF_00FF_00FF_00FF;
+        let v = (v.wrapping_mul(100) + (v >> 16)) & 0x0000_FFFF_0000_FFFF;
+        let v = (v.wrapping_mul(10_000) + (v >> 32)) & 0xFFFF_FFFF;
+        m = m.wrapping_mul(POW10[c]).wrapping_add(v);
+        i += c;
+        if c < 8 {
+            return (m, i);
+        }
+    }
+    while let Some(d) = b.get(i).map(|c| c.wrapping_sub(b'0')).filter(|&d| d < 10) {
+        m = m.wrapping_mul(10).wrapping_add(u64::from(d));
+        i += 1;
+    }
+    (m, i)
+}
+
+/// The index of the first separator of `b` from `i` (or its length). Eight bytes at a time over bytes
+/// that cannot be separators (all above `,`: digits, `.`, `-`, letters), as fields mostly are.
+fn field_end(b: &[u8], mut i: usize) -> usize {
+    while let Some(chunk) = b.get(i..i + 8) {
+        let w = u64::from_le_bytes(chunk.try_into().unwrap_or([0; 8]));
+        // The high bit of each byte below 0x2D (exact up to the first such byte; non-ASCII bytes,
+        // never separators, are not flagged).
+        let low = w.wrapping_sub(0x2D2D_2D2D_2D2D_2D2D) & !w & 0x8080_8080_8080_8080;
+        if low != 0 {
+            i += (low.trailing_zeros() / 8) as usize;
+            break;
+        }
+        i += 8;
+    }
+    while i < b.len() && !is_sep(b[i]) {
+        i += 1;
+    }
+    i
+}
+
 /// The next field of `line` from byte `k` (fields are runs between spaces, tabs and commas); with
 /// `parse` false the field is only delimited (its value reads as 0).
-fn next_field<'a>(line: &'a str, k: &mut usize, parse: bool) -> Option<Field<'a>> {
-    let b = line.as_bytes();
-    let sep = |c: u8| c == b' ' || c == b'\t' || c == b',' || c == b'\r';
-    while *k < b.len() && sep(b[*k]) {
+fn next_field<'a>(b: &'a [u8], k: &mut usize, parse: bool) -> Option<Field<'a>> {
+    while *k < b.len() && is_sep(b[*k]) {
         *k += 1;
     }
     if *k == b.len() {
         return None;
     }
     let start = *k;
-    if !parse {
-        while *k < b.len() && !sep(b[*k]) {
-            *k += 1;
+    let mut plain = None;
+    if parse {
+        // [sign] integer digits [. fraction digits], nothing else before the separator.
+        let neg = b[start] == b'-';
+        let int_start = start + usize::from(neg || b[start] == b'+');
+        let (int, mut i) = digits(b, int_start);
+        let int_digits = i - int_start;
+        let (mut fraction, mut frac) = (0, 0);
+        if b.get(i) == Some(&b'.') {
+            let (f, end) = digits(b, i + 1);
+            (fraction, frac) = (f, end - i - 1);
+            i = end;
         }
-        return Some(Field {
-            text: &line[start..*k],
-            plain: Some((false, 0, 0)),
-        });
-    }
-    let neg = b[*k] == b'-';
-    if neg || b[*k] == b'+' {
-        *k += 1;
-    }
-    let (mut m, mut digits, mut frac, mut dot, mut plain) = (0u64, 0usize, 0usize, false, true);
-    while *k < b.len() && !sep(b[*k]) {
-        match b[*k] {
-            c @ b'0'..=b'9' if digits < 19 => {
-                m = m * 10 + u64::from(c - b'0');
-                digits += 1;
-                frac += usize::from(dot);
-            }
-            b'.' if !dot => dot = true,
-            _ => plain = false,
+        let n = int_digits + frac;
+        if (i == b.len() || is_sep(b[i])) && n > 0 && n <= 19 {
+            // At most 19 digits: `int · 10^frac + fraction` fits in a u64.
+            plain = Some((neg, int * 10u64.pow(frac as u32) + fraction, frac));
         }
-        *k += 1;
+        *k = i;
     }
-    // Separators are ASCII: both ends are char boundaries.
+    *k = field_end(b, *k);
     Some(Field {
-        text: &line[start..*k],
-        plain: (plain && digits > 0).then_some((neg, m, frac)),
+        text: &b[start..*k],
+        plain: plain.or((!parse).then_some((false, 0, 0))),
     })
 }
 
@@ -254,22 +517,23 @@ mod tests {
     #[test]
     fn fast_numbers_equal_std_parse() {
         let line = "0 -0.5 1311868164.363181 0.123456789 -12.000001 +3.25 1.5e3 1e-7 \
-                    123456789012345678 0.1234567890123456789 nan inf 1. 12345678901234567890123";
+                    123456789012345678 0.1234567890123456789 nan inf 1. 12345678901234567890123 \
+                    .5 -.5 00012.50 9999999999999999999 1234567890.1234567891 -0.000000001";
         let mut k = 0;
-        while let Some(f) = next_field(line, &mut k, true) {
-            let want: Option<f64> = f.text.parse().ok();
+        while let Some(f) = next_field(line.as_bytes(), &mut k, true) {
+            let want: Option<f64> = std::str::from_utf8(f.text).unwrap().parse().ok();
             assert_eq!(
                 f.value().map(f64::to_bits),
                 want.map(f64::to_bits),
                 "{}",
-                f.text
+                String::from_utf8_lossy(f.text)
             );
         }
         let mut k = 0;
-        let f = next_field(" .,1x", &mut k, true).unwrap();
-        assert_eq!((f.text, f.value()), (".", None));
-        let f = next_field(" .,1x", &mut k, true).unwrap();
-        assert_eq!((f.text, f.value()), ("1x", None));
+        let f = next_field(b" .,1x", &mut k, true).unwrap();
+        assert_eq!((f.text, f.value()), (&b"."[..], None));
+        let f = next_field(b" .,1x", &mut k, true).unwrap();
+        assert_eq!((f.text, f.value()), (&b"1x"[..], None));
         for (s, ns) in [
             ("1700000000.010000", Some(1_700_000_000_010_000_000)),
             ("12", Some(12_000_000_000)),
@@ -277,7 +541,67 @@ mod tests {
             ("1718460000.123456789", Some(1_718_460_000_123_456_789)),
         ] {
             let mut k = 0;
-            assert_eq!(next_field(s, &mut k, true).unwrap().stamp_ns(), ns, "{s}");
+            assert_eq!(
+                next_field(s.as_bytes(), &mut k, true).unwrap().stamp_ns(),
+                ns,
+                "{s}"
+            );
+        }
+    }
+
+    #[test]
+    fn random_decimals_equal_std_parse() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let digit =
+            |rng: &mut rand_chacha::ChaCha8Rng| char::from(b'0' + rng.random_range(0..10u8));
+        for _ in 0..20_000 {
+            let mut s = String::new();
+            if rng.random_bool(0.3) {
+                s.push('-');
+            }
+            (0..rng.random_range(0..14)).for_each(|_| s.push(digit(&mut rng)));
+            if rng.random_bool(0.8) {
+                s.push('.');
+                (0..rng.random_range(0..14)).for_each(|_| s.push(digit(&mut rng)));
+            }
+            let line = format!("{s} {s},{s}");
+            let mut k = 0;
+            while let Some(f) = next_field(line.as_bytes(), &mut k, true) {
+                let want: Option<f64> = s.parse().ok();
+                assert_eq!(f.value().map(f64::to_bits), want.map(f64::to_bits), "{s}");
+                assert_eq!(f.stamp_ns(), parse_stamp_ns(&s), "{s}");
+            }
+        }
+    }
+
+    #[test]
+    fn decimal_orientations_equal_parsed_ones() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("q.tum");
+        let rows = "1.0 0 0 0 -0.000000000 0.000000000 0.707106781 0.707106781\n\
+                    2.0 1 2 3 0.182574186 -0.365148372 0.547722558 0.730296743\n";
+        for (extra, decimal) in [
+            ("", true),
+            ("3.0 1 2 3 0.5 0.5 0.5 0.5\n", false),
+            ("3.0 1 2 3 0.100000000 12345678.123456789 1e-3 0.2\n", false),
+        ] {
+            std::fs::write(&path, format!("{rows}{extra}")).unwrap();
+            let (t, q) = read_tum_rows_compact(&path, true).unwrap();
+            let q = q.unwrap();
+            assert_eq!(matches!(q, TumOrientations::Decimal(_)), decimal);
+            let want = read_tum_rows_with(&path, true).unwrap();
+            let bits = |v: &[UnitQuaternion<f64>]| -> Vec<[u64; 4]> {
+                v.iter()
+                    .map(|q| q.coords.as_slice().to_vec())
+                    .map(|c| [0, 1, 2, 3].map(|k| c[k].to_bits()))
+                    .collect()
+            };
+            assert_eq!(t.stamps_ns, want.stamps_ns);
+            assert_eq!(
+                bits(&q.into_quaternions()),
+                bits(&want.orientations.unwrap())
+            );
         }
     }
 

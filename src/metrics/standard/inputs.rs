@@ -11,7 +11,7 @@ use crate::eval::config::{EvalConfig, NamedInput};
 use crate::sources::euroc::read_euroc;
 use crate::sources::kitti::read_kitti_matrices;
 use crate::sources::text::{detect_format, TextFormat};
-use crate::sources::tum::read_tum_rows_with;
+use crate::sources::tum::read_tum_rows_compact;
 use crate::sources::Progress;
 
 /// evo's format word.
@@ -165,10 +165,8 @@ fn load_text(
 ) -> Result<LoadedPair> {
     let tum = |path: &Path| -> Result<Poses> {
         check_format(path, TextFormat::Tum, format)?;
-        Ok(Poses::from_trajectory(
-            read_tum_rows_with(path, orientation)?,
-            Some(StampSeconds::Decimal),
-        ))
+        let (rows, orientations) = read_tum_rows_compact(path, orientation)?;
+        Ok(Poses::from_tum(rows, orientations))
     };
     let kitti = |path: &Path| -> Result<Poses> {
         check_format(path, TextFormat::Kitti, format)?;
