@@ -3,7 +3,8 @@
 //! once — so a row of the sweep equals the single run at that value. This is the paper's ε_min figure (DE and the discarded share
 //! against ε) and its time-shift figure (DE against an applied Δt, each method's answer marked).
 //!
-//! What a row holds is computed by [`row_metrics`] alone: a new metric (APE, RPE) is one field there
+//! What a row holds is computed by [`row_metrics`] alone (DE, and evo's APE and RPE point distance when
+//! `--metrics` asks for them): a new metric is one field there
 //! and one CSV column in [`Sweep::to_csv`].
 
 use rayon::prelude::*;
@@ -130,7 +131,10 @@ pub struct RowMetrics {
     pub applied_offset_s: f64,
     /// `ok`, `weak` or `given`.
     pub offset_status: String,
-    // APE / RPE (issue 11): add the fields here, fill them in `row_metrics`, add the CSV columns.
+    /// evo's APE (SE(3), translation part) RMSE of that run, m (when `--metrics` asks for it).
+    pub ape_rmse: Option<f64>,
+    /// evo's RPE point distance over 1 m, RMSE, m (positions alone, so defined for every input).
+    pub rpe_point_distance_1m_rmse: Option<f64>,
 }
 
 /// The metrics of a row, from one estimate's report at one window size.
@@ -143,6 +147,16 @@ pub fn row_metrics(e: &EstimateReport, d: &DriftErrorReport) -> RowMetrics {
         discarded_fraction: d.discarded_fraction,
         applied_offset_s: e.time_offset.applied_s,
         offset_status: e.time_offset.status.clone(),
+        ape_rmse: e
+            .standard_metrics
+            .as_ref()
+            .and_then(|m| m.ape.as_ref())
+            .map(|r| r.stats.rmse),
+        rpe_point_distance_1m_rmse: e
+            .standard_metrics
+            .as_ref()
+            .and_then(|m| m.rpe_point_distance_1m.as_ref())
+            .map(|r| r.stats.rmse),
     }
 }
 
@@ -269,6 +283,8 @@ impl Sweep {
             "discarded_fraction",
             "applied_offset_s",
             "offset_status",
+            "ape_rmse",
+            "rpe_point_distance_1m_rmse",
             "error",
         ])
         .map_err(io)?;
@@ -286,6 +302,8 @@ impl Sweep {
                 opt(m.map(|m| m.discarded_fraction)),
                 opt(m.map(|m| m.applied_offset_s)),
                 m.map_or(String::new(), |m| m.offset_status.clone()),
+                opt(m.and_then(|m| m.ape_rmse)),
+                opt(m.and_then(|m| m.rpe_point_distance_1m_rmse)),
                 r.error.clone().unwrap_or_default(),
             ])
             .map_err(io)?;
