@@ -6,7 +6,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::style::{
-    decimate, label_font, padded_range, plot_err, series_color, title_font, Draw, MAX_POINTS,
+    decimate, label_font, padded_range, plot_err, series_color, xy_chart, Draw, MAX_POINTS,
 };
 use crate::error::Result;
 
@@ -33,21 +33,15 @@ impl Draw for DriftAlong {
         let all = || self.series.iter().flat_map(|s| s.points.iter());
         let (x0, x1) = padded_range(all().map(|p| p.0));
         let (_, y1) = padded_range(all().map(|p| p.1).chain([0.0]));
-        let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, title_font())
-            .margin(10)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d(x0..x1, 0.0..y1)
-            .map_err(plot_err)?;
-        chart
-            .configure_mesh()
-            .x_desc("distance along the reference (m)")
-            .y_desc("Drift Error |1 − α·Δs_est/Δs_ref| (–)")
-            .label_style(label_font())
-            .axis_desc_style(label_font())
-            .draw()
-            .map_err(plot_err)?;
+        let mut chart = xy_chart(
+            root,
+            &self.title,
+            ((x0, x1), (0.0, y1)),
+            (
+                "distance along the reference (m)",
+                "Drift Error |1 − α·Δs_est/Δs_ref| (–)",
+            ),
+        )?;
         let n = self.series.len();
         for (i, s) in self.series.iter().enumerate() {
             let c = series_color(i, n);
