@@ -67,39 +67,58 @@ pub fn resample_on_grid(
     len: usize,
     max_gap_s: f64,
 ) -> RegularSignal {
-    let samples: Vec<(f64, f64)> = times
+    let n = times.len().min(values.len());
+    if (0..n).all(|k| times[k].is_finite() && values[k].is_finite()) {
+        return resample_finite_on_grid(&times[..n], &values[..n], step, first_index, len, max_gap_s);
+    }
+    let (t, v): (Vec<f64>, Vec<f64>) = times
         .iter()
         .zip(values)
         .filter(|(t, v)| t.is_finite() && v.is_finite())
-        .map(|(&t, &v)| (t, v))
-        .collect();
+        .unzip();
+    resample_finite_on_grid(&t, &v, step, first_index, len, max_gap_s)
+}
+
+/// [`resample_on_grid`] of samples that are all finite, `times` non-decreasing and as long as
+/// `values`: no copy of the samples, and the first one found by bisection, so that a long signal
+/// resampled block by block costs each block its own length only.
+pub fn resample_finite_on_grid(
+    times: &[f64],
+    values: &[f64],
+    step: f64,
+    first_index: i64,
+    len: usize,
+    max_gap_s: f64,
+) -> RegularSignal {
     let mut out = RegularSignal {
         first_index,
         step,
         values: vec![0.0; len],
         mask: vec![0.0; len],
     };
-    if samples.is_empty() || step.is_nan() || step <= 0.0 {
+    if times.is_empty() || step.is_nan() || step <= 0.0 {
         return out;
     }
-    // Grid times rise monotonically, so one cursor walks the samples once.
+    // Grid times rise monotonically, so one cursor walks the samples once; it starts at the last
+    // sample at or before the first grid time.
     let tol = 1e-9 * step;
-    let mut k = 0usize;
+    let first_t = first_index as f64 * step;
+    let mut k = times.partition_point(|&x| x <= first_t).saturating_sub(1);
     for i in 0..len {
         let t = (first_index + i as i64) as f64 * step;
-        while k + 1 < samples.len() && samples[k + 1].0 <= t {
+        while k + 1 < times.len() && times[k + 1] <= t {
             k += 1;
         }
-        let (t0, v0) = samples[k];
+        let (t0, v0) = (times[k], values[k]);
         if (t - t0).abs() <= tol {
             out.values[i] = v0;
             out.mask[i] = 1.0;
             continue;
         }
-        if t < t0 || k + 1 >= samples.len() {
+        if t < t0 || k + 1 >= times.len() {
             continue;
         }
-        let (t1, v1) = samples[k + 1];
+        let (t1, v1) = (times[k + 1], values[k + 1]);
         let gap = t1 - t0;
         if gap > max_gap_s || gap <= 0.0 {
             continue;

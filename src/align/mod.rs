@@ -4,6 +4,7 @@ pub mod auto_offset;
 pub mod auto_params;
 pub mod clock_model;
 pub mod curvature;
+pub mod fine_sums;
 pub mod grid;
 pub mod offset_profile;
 pub mod offset_sigma;

@@ -32,10 +32,11 @@
 use nalgebra::Vector3;
 
 use crate::align::curvature::{curvature_signature, CurvatureParams};
-use crate::align::grid::{grid_span, resample, resample_on_grid, RegularSignal};
+use crate::align::fine_sums::fine_sums;
+use crate::align::grid::resample;
 use crate::align::offset_sigma::offset_sigma;
 use crate::align::speed::speed_profile;
-use crate::align::xcorr::{masked_ncc, Centering, OverlapSums};
+use crate::align::xcorr::{masked_ncc, Centering};
 use crate::error::{Error, Result};
 
 /// Which signal the offset is estimated from.
@@ -165,9 +166,6 @@ const MIN_LOBE_SPEED_S: f64 = 3.0;
 const MAX_LOBE_S: f64 = 20.0;
 /// Fine refinement window, in coarse steps on each side of the coarse peak.
 const FINE_WINDOW_COARSE_STEPS: f64 = 2.0;
-/// Fine-grid points processed per block (bounds the buffers on long missions).
-const FINE_BLOCK: usize = 1 << 16;
-
 /// Estimates Δt such that t_est + Δt is on the reference clock. Times are seconds from a common
 /// origin, increasing, each as long as its positions; `est_t` is on the estimate's clock.
 pub fn estimate_time_offset(
@@ -551,7 +549,7 @@ fn search(
     let hi = ((coarse_offset + FINE_WINDOW_COARSE_STEPS * h) / hf).round() as i64;
     let kf_max = (params.max_offset_s / hf).floor() as i64;
     let (lo, hi) = (lo.max(-kf_max), hi.min(kf_max));
-    let sums = fine_sums(et, ev, rt, rv, hf, gap, lo, hi);
+    let sums = fine_sums((et, ev), (rt, rv), hf, gap, lo, hi);
     let fine: Vec<f64> = sums.iter().map(|s| s.ncc(centering)).collect();
     let fine_min_overlap = sums.iter().map(|s| s.n).fold(0.0, f64::max) * MIN_OVERLAP_SHARE;
     let Some(j) = (0..fine.len())
@@ -719,52 +717,4 @@ fn peak_separation(
         margin: rho - ncc[r],
         rival: Some(r),
     }
-}
-
-/// Overlap sums at the fine lags `lo..=hi` (Δt = k·hf) by direct summation, streaming the estimate's
-/// fine grid in blocks so that no buffer grows with the mission's length.
-#[allow(clippy::too_many_arguments)]
-fn fine_sums(
-    et: &[f64],
-    ev: &[f64],
-    rt: &[f64],
-    rv: &[f64],
-    hf: f64,
-    gap: f64,
-    lo: i64,
-    hi: i64,
-) -> Vec<OverlapSums> {
-    let lags = (hi - lo + 1).max(0) as usize;
-    let mut sums = vec![OverlapSums::default(); lags];
-    let (Some((e0, e1)), Some((r0, r1))) = (
-        grid_span(et[0], et[et.len() - 1], hf),
-        grid_span(rt[0], rt[rt.len() - 1], hf),
-    ) else {
-        return sums;
-    };
-    // Only estimate points that can meet the reference at some lag matter.
-    let (e0, e1) = (e0.max(r0 - hi), e1.min(r1 - lo));
-    let mut start = e0;
-    while start <= e1 {
-        let len = ((e1 - start + 1) as usize).min(FINE_BLOCK);
-        let e: RegularSignal = resample_on_grid(et, ev, hf, start, len, gap);
-        let r = resample_on_grid(rt, rv, hf, start + lo, len + lags - 1, gap);
-        // Masked values are 0, so every overlap sum is a plain dot product (vectorises well).
-        let ea2: Vec<f64> = e.values.iter().map(|v| v * v).collect();
-        let rb2: Vec<f64> = r.values.iter().map(|v| v * v).collect();
-        for (l, s) in sums.iter_mut().enumerate() {
-            let (rv, rm, rb2) = (&r.values[l..l + len], &r.mask[l..l + len], &rb2[l..l + len]);
-            for j in 0..len {
-                let (x, mx, y, my) = (e.values[j], e.mask[j], rv[j], rm[j]);
-                s.n += mx * my;
-                s.sa += x * my;
-                s.sb += mx * y;
-                s.sab += x * y;
-                s.saa += ea2[j] * my;
-                s.sbb += mx * rb2[j];
-            }
-        }
-        start += len as i64;
-    }
-    sums
 }
