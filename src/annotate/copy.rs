@@ -7,7 +7,7 @@
 //! copied: the writer writes a new one that also lists the new channels.
 
 use std::collections::HashMap;
-use std::io::{Read, Seek, Write};
+use std::io::{Seek, Write};
 use std::path::Path;
 
 use mcap::records::{op, MessageHeader, Record};
@@ -15,7 +15,7 @@ use mcap::sans_io::LinearReadEvent;
 use mcap::{McapError, Writer};
 
 use crate::error::{Error, Result};
-use crate::sources::mcap::stream::open_linear;
+use crate::sources::mcap::stream::{fill, open_linear};
 use crate::sources::Progress;
 
 /// What the copy pass tells the annotations about an input channel.
@@ -55,7 +55,6 @@ pub struct CopyOutcome {
     pub truncated_at: Option<u64>,
 }
 
-const MIN_READ: usize = 256 * 1024;
 const PROGRESS_STEP: u64 = 1 << 20;
 
 /// Copies `input` into `out` record by record, calling `annotations` along the way. `options` sets the
@@ -117,14 +116,8 @@ pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
         };
         let (opcode, data) = match event {
             LinearReadEvent::ReadRequest(need) => {
-                let buf = reader.insert(need.max(MIN_READ));
-                let n = loop {
-                    match file.read(buf) {
-                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                        other => break other.map_err(|e| Error::io(input, e))?,
-                    }
-                };
-                reader.notify_read(n);
+                let n = fill(&mut reader, &mut file, need, file_size.saturating_sub(bytes_read))
+                    .map_err(|e| Error::io(input, e))?;
                 bytes_read += n as u64;
                 if bytes_read - last_progress >= PROGRESS_STEP {
                     last_progress = bytes_read;

@@ -73,9 +73,8 @@ where
         };
         match event {
             LinearReadEvent::ReadRequest(need) => {
-                let buf = reader.insert(need.max(MIN_READ));
-                let n = read_retrying(&mut file, buf).map_err(|e| Error::io(path, e))?;
-                reader.notify_read(n);
+                let n = fill(&mut reader, &mut file, need, file_size.saturating_sub(out.bytes_read))
+                    .map_err(|e| Error::io(path, e))?;
                 out.bytes_read += n as u64;
                 if out.bytes_read - last_progress >= PROGRESS_STEP {
                     last_progress = out.bytes_read;
@@ -160,7 +159,6 @@ where
     Ok(out)
 }
 
-/// Reads the first 8 bytes and checks they are the MCAP magic: [`Error::NotMcap`] otherwise.
 /// Opens `path` and a [`LinearReader`] over it that has already consumed the magic: the one way every
 /// streaming pass (extraction, topics, the annotated copy) starts. Chunk CRCs are checked; a record cannot
 /// be longer than the file, except one inside a compressed chunk, so the length limit keeps a corrupt
@@ -169,17 +167,48 @@ pub(crate) fn open_linear(path: &Path) -> Result<(std::fs::File, LinearReader, [
     let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let file_size = file.metadata().map_err(|e| Error::io(path, e))?.len();
     let magic = read_magic(&mut file, path)?;
-    let limit = usize::try_from(file_size.max(256 << 20)).unwrap_or(usize::MAX);
     let mut reader = LinearReader::new_with_options(
         LinearReaderOptions::default()
             .with_validate_chunk_crcs(true)
-            .with_record_length_limit(limit),
+            .with_record_length_limit(record_length_limit(file_size)),
     );
     reader.insert(magic.len()).copy_from_slice(&magic);
     reader.notify_read(magic.len());
     Ok((file, reader, magic, file_size))
 }
 
+/// The longest record the reader accepts in a file of `file_size` bytes. A record in the file cannot be
+/// longer than the file; one inside a compressed chunk can, by the compression ratio, and the crate
+/// reserves (zero-fills) a declared inner length before decompressing it. So the limit is 256× the file
+/// (a ratio real recordings do not reach), at least 16 MiB and at most max(256 MiB, the file): a damaged
+/// length in a 3 KB file then costs 16 MiB, not 256 MiB.
+fn record_length_limit(file_size: u64) -> usize {
+    let limit = file_size
+        .saturating_mul(256)
+        .min(file_size.max(256 << 20))
+        .max(16 << 20);
+    usize::try_from(limit).unwrap_or(usize::MAX)
+}
+
+/// Answers the reader's request for `need` more bytes with one read of at least [`MIN_READ`] bytes,
+/// but never more than the `left` bytes the file still holds (+1 to see its end): the reader's buffer
+/// is zero-filled to the requested size, so a damaged length must not size it. Returns the bytes read
+/// (0 at the end of the file).
+pub(crate) fn fill(
+    reader: &mut LinearReader,
+    file: &mut std::fs::File,
+    need: usize,
+    left: u64,
+) -> std::io::Result<usize> {
+    let want = need
+        .max(MIN_READ)
+        .min(usize::try_from(left).unwrap_or(usize::MAX).saturating_add(1));
+    let n = read_retrying(file, reader.insert(want))?;
+    reader.notify_read(n);
+    Ok(n)
+}
+
+/// Reads the first 8 bytes and checks they are the MCAP magic: [`Error::NotMcap`] otherwise.
 pub(crate) fn read_magic(file: &mut std::fs::File, path: &Path) -> Result<[u8; 8]> {
     let mut magic = [0u8; 8];
     let mut got = 0;
