@@ -23,8 +23,8 @@ use nalgebra::Vector3;
 use crate::align::auto_params::moving_speed;
 use crate::align::still::still_intervals;
 use crate::align::time_offset::{
-    estimate_time_offset, estimate_time_offset_excluding, OffsetEstimate, OffsetMethod,
-    OffsetParams, OffsetStatus,
+    estimate_time_offset_cached, OffsetEstimate, OffsetMethod, OffsetParams, OffsetStatus, Pair,
+    SignalCache,
 };
 use crate::error::Result;
 use crate::sources::Warning;
@@ -170,15 +170,17 @@ pub fn auto_time_offset(
     est_p: &[Vector3<f64>],
     params: &OffsetParams,
 ) -> Result<AutoOffset> {
+    let cache = SignalCache::default();
+    auto_time_offset_of(&Pair::new((ref_t, ref_p), (est_t, est_p), &cache), params)
+}
+
+/// [`auto_time_offset`] over the signals of `pair` (each computed once, kept for the profile).
+pub fn auto_time_offset_of(pair: &Pair<'_>, params: &OffsetParams) -> Result<AutoOffset> {
     use rayon::prelude::*;
+    let (ref_t, ref_p) = pair.reference;
     let runs: Vec<(OffsetMethod, Result<OffsetEstimate>)> = AUTO_METHODS
         .par_iter()
-        .map(|&m| {
-            (
-                m,
-                estimate_time_offset(m, ref_t, ref_p, est_t, est_p, params),
-            )
-        })
+        .map(|&m| (m, estimate_time_offset_cached(m, pair, params, (&[], &[]))))
         .collect();
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
     let mean_speed_mps = moving_speed(ref_t, ref_p, gap).map(|m| m.0);
@@ -204,15 +206,11 @@ pub fn auto_time_offset(
                     .iter()
                     .map(|&(a, b)| (a - s.offset_s, b - s.offset_s))
                     .collect();
-                if let Ok(m) = estimate_time_offset_excluding(
+                if let Ok(m) = estimate_time_offset_cached(
                     OffsetMethod::SignedCurvature,
-                    ref_t,
-                    ref_p,
-                    est_t,
-                    est_p,
+                    pair,
                     params,
-                    &on_ref,
-                    &on_est,
+                    (&on_ref, &on_est),
                 ) {
                     stands_left_out = Some((on_ref.len(), c.offset_s, m.offset_s));
                     signed = (m.status == OffsetStatus::Ok).then_some(m);

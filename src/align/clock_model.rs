@@ -18,7 +18,7 @@
 //! with time: Δt(t) = Δt(t_mid) − drift_ppm·10⁻⁶·(t − t_mid).
 
 use crate::align::offset_profile::{OffsetProfile, ProfileWindow, SIGMA_FLOOR_S};
-use crate::align::time_offset::Signal;
+use crate::align::time_offset::{Pair, Signal};
 
 /// A model must lower the BIC by this much to replace `constant`.
 pub const BIC_MARGIN: f64 = 10.0;
@@ -528,12 +528,22 @@ pub fn clock_model(
     profile: &crate::align::offset_profile::ProfileParams,
     forced: Option<OffsetModel>,
 ) -> crate::error::Result<(OffsetProfile, ClockModel)> {
+    let cache = crate::align::time_offset::SignalCache::default();
+    let pair = Pair::new((ref_t, ref_p), (est_t, est_p), &cache);
+    clock_model_of(&pair, params, whole, profile, forced)
+}
+
+/// [`clock_model`] over the signals of `pair` (those the whole-mission search computed).
+pub fn clock_model_of(
+    pair: &Pair<'_>,
+    params: &crate::align::time_offset::OffsetParams,
+    whole: &crate::align::time_offset::OffsetEstimate,
+    profile: &crate::align::offset_profile::ProfileParams,
+    forced: Option<OffsetModel>,
+) -> crate::error::Result<(OffsetProfile, ClockModel)> {
     let (p, (r, e)) = crate::align::offset_profile::offset_profile(
         whole.method,
-        ref_t,
-        ref_p,
-        est_t,
-        est_p,
+        pair,
         params,
         whole.offset_s,
         profile,

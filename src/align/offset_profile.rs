@@ -22,10 +22,10 @@
 //! and the method's own bias of a few ms). tests/time_offset_profile.rs `coverage_table` shows the
 //! coverage of 2σ over simulated missions.
 
-use nalgebra::Vector3;
+use std::sync::Arc;
 
 use crate::align::time_offset::{
-    prepared_signals, search_signals, OffsetMethod, OffsetParams, Signal,
+    prepared_signals, search_signals, OffsetMethod, OffsetParams, Pair, Signal,
 };
 use crate::error::Result;
 
@@ -101,20 +101,16 @@ pub fn window_and_step(span_s: f64, p: &ProfileParams) -> (f64, f64) {
     (w, s)
 }
 
-/// The profile of `method` around the whole mission's `offset_s` (see the module doc). Times are
-/// seconds from a common origin, the estimate's on its own clock.
-#[allow(clippy::too_many_arguments)]
+/// The profile of `method` around the whole mission's `offset_s` (see the module doc), over the
+/// signals of `pair` (computed once, shared with the whole-mission search), and those signals.
 pub fn offset_profile(
     method: OffsetMethod,
-    ref_t: &[f64],
-    ref_p: &[Vector3<f64>],
-    est_t: &[f64],
-    est_p: &[Vector3<f64>],
+    pair: &Pair<'_>,
     params: &OffsetParams,
     offset_s: f64,
     profile: &ProfileParams,
-) -> Result<(OffsetProfile, (Signal, Signal))> {
-    let (r, e) = prepared_signals(method, ref_t, ref_p, est_t, est_p, params, offset_s)?;
+) -> Result<(OffsetProfile, (Arc<Signal>, Arc<Signal>))> {
+    let (r, e) = prepared_signals(method, pair, params, offset_s)?;
     let p = profile_of_signals(method, (&r, &e), params, offset_s, profile);
     Ok((p, (r, e)))
 }

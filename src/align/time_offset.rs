@@ -29,6 +29,8 @@
 //! `curvature` offset is off by ≈ d/v with a perfect-looking peak (legged: 0.2 m at ~0.4 m/s gives
 //! +0.5 s). Speed has no such first-order shift.
 
+use std::sync::{Arc, OnceLock};
+
 use nalgebra::Vector3;
 
 use crate::align::curvature::{curvature_signature, CurvatureParams};
@@ -193,6 +195,18 @@ pub fn estimate_time_offset_excluding(
     ref_exclude: &[(f64, f64)],
     est_exclude: &[(f64, f64)],
 ) -> Result<OffsetEstimate> {
+    let cache = SignalCache::default();
+    let pair = Pair::new((ref_t, ref_p), (est_t, est_p), &cache);
+    estimate_time_offset_cached(method, &pair, params, (ref_exclude, est_exclude))
+}
+
+/// [`estimate_time_offset_excluding`] with the signals taken from (or put into) `pair`'s cache.
+pub fn estimate_time_offset_cached(
+    method: OffsetMethod,
+    pair: &Pair<'_>,
+    params: &OffsetParams,
+    (ref_exclude, est_exclude): (&[(f64, f64)], &[(f64, f64)]),
+) -> Result<OffsetEstimate> {
     check_params(params)?;
     if method == OffsetMethod::Auto {
         // `auto` is decided above the search (crate::align::auto_offset), never inside it.
@@ -201,29 +215,24 @@ pub fn estimate_time_offset_excluding(
         ));
     }
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
-    let (rt, rv, rw) = without(
-        method_signal(method, ref_t, ref_p, params, "reference")?,
-        ref_exclude,
-    );
-    let (et, ev, ew) = without(
-        method_signal(method, est_t, est_p, params, "estimate")?,
-        est_exclude,
-    );
-    let first = search_signals(method, (&rt, &rv), (&et, &ev), params)?;
+    let (r, e) = pair.signals(method, params)?;
+    let (r, e) = (without(&r, ref_exclude), without(&e, est_exclude));
+    let ((rt, rv, rw), (et, ev, ew)) = (r.as_ref(), e.as_ref());
+    let first = search_signals(method, (rt, rv), (et, ev), params)?;
     if method != OffsetMethod::Speed {
         return Ok(first);
     }
     // A lateral lever arm: the estimate's sensor moves at v − ω·d in every turn. Its d is measured at
     // the first answer and taken out of the estimate's speed before a second search.
-    match lateral_lever_from_speed((&rt, &rv, &rw), (&et, &ev), first.offset_s, gap) {
+    match lateral_lever_from_speed((rt, rv, rw), (et, ev), first.offset_s, gap) {
         Some(lever) if lever.abs() >= MIN_SPEED_LEVER_M => {
             // The lever moves Δt by tens of ms: rather than a second search (whose fine peak can
             // jump between neighbouring lags on a change in the last digits), the Gauss–Newton
             // shift of the corrected speed against the reference, continuous in the data.
-            let corrected: Vec<f64> = ev.iter().zip(&ew).map(|(v, w)| v + lever * w).collect();
+            let corrected: Vec<f64> = ev.iter().zip(ew).map(|(v, w)| v + lever * w).collect();
             let mut offset = first.offset_s;
             for _ in 0..GAUSS_NEWTON_STEPS {
-                match gauss_newton_shift((&rt, &rv), (&et, &corrected), offset, gap) {
+                match gauss_newton_shift((rt, rv), (et, &corrected), offset, gap) {
                     Some(d) if d.abs() <= REFINE_S => offset += d,
                     _ => return Ok(first),
                 }
@@ -236,7 +245,7 @@ pub fn estimate_time_offset_excluding(
             let h = params.coarse_grid_s;
             Ok(OffsetEstimate {
                 offset_s: offset,
-                sigma_s: offset_sigma((&rt, &rv), (&et, &corrected), offset, h, gap, centering),
+                sigma_s: offset_sigma((rt, rv), (et, &corrected), offset, h, gap, centering),
                 ..first
             })
         }
@@ -244,33 +253,115 @@ pub fn estimate_time_offset_excluding(
     }
 }
 
-/// Both trajectories' signals for `method`, computed once, the estimate's speed freed of a lateral
-/// lever arm measured at `offset_s` (what [`estimate_time_offset`] found): the offset profile
-/// correlates windows of these.
+/// Both trajectories' signals for `method`, the estimate's speed freed of a lateral lever arm
+/// measured at `offset_s` (what [`estimate_time_offset`] found): the offset profile correlates
+/// windows of these. Taken from `pair`'s cache when the search computed them.
 pub fn prepared_signals(
     method: OffsetMethod,
-    ref_t: &[f64],
-    ref_p: &[Vector3<f64>],
-    est_t: &[f64],
-    est_p: &[Vector3<f64>],
+    pair: &Pair<'_>,
     params: &OffsetParams,
     offset_s: f64,
-) -> Result<(Signal, Signal)> {
+) -> Result<(Arc<Signal>, Arc<Signal>)> {
     check_params(params)?;
-    let r = method_signal(method, ref_t, ref_p, params, "reference")?;
-    let mut e = method_signal(method, est_t, est_p, params, "estimate")?;
+    let (r, mut e) = pair.signals(method, params)?;
     if method == OffsetMethod::Speed {
         let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
         if let Some(lever) =
             lateral_lever_from_speed((&r.0, &r.1, &r.2), (&e.0, &e.1), offset_s, gap)
                 .filter(|l| l.abs() >= MIN_SPEED_LEVER_M)
         {
-            for (v, w) in e.1.iter_mut().zip(&e.2) {
+            let mut corrected = Signal::clone(&e);
+            for (v, w) in corrected.1.iter_mut().zip(&corrected.2) {
                 *v += lever * w;
             }
+            e = Arc::new(corrected);
         }
     }
     Ok((r, e))
+}
+
+/// The two trajectories of one evaluation (times from a common origin, the estimate's on its own
+/// clock) and their signals, each computed at most once: by the first method that needs it, then
+/// shared with the other methods, the `auto` re-run without stands and the offset profile.
+pub struct Pair<'a> {
+    pub reference: (&'a [f64], &'a [Vector3<f64>]),
+    pub estimate: (&'a [f64], &'a [Vector3<f64>]),
+    cache: &'a SignalCache,
+}
+
+/// The signals of a [`Pair`] once computed (unsigned and signed curvature come from one signature),
+/// reference first.
+#[derive(Default)]
+pub struct SignalCache {
+    curvature: [OnceLock<(Arc<Signal>, Arc<Signal>)>; 2],
+    speed: [OnceLock<Arc<Signal>>; 2],
+}
+
+impl<'a> Pair<'a> {
+    pub fn new(
+        reference: (&'a [f64], &'a [Vector3<f64>]),
+        estimate: (&'a [f64], &'a [Vector3<f64>]),
+        cache: &'a SignalCache,
+    ) -> Pair<'a> {
+        Pair {
+            reference,
+            estimate,
+            cache,
+        }
+    }
+
+    /// The reference's and the estimate's signal for `method` (the curvature parameters, speed
+    /// window and gap must be those of every call with this cache).
+    pub fn signals(
+        &self,
+        method: OffsetMethod,
+        params: &OffsetParams,
+    ) -> Result<(Arc<Signal>, Arc<Signal>)> {
+        Ok((
+            checked(self.one(0, method, params), method, "reference")?,
+            checked(self.one(1, method, params), method, "estimate")?,
+        ))
+    }
+
+    fn one(&self, k: usize, method: OffsetMethod, params: &OffsetParams) -> Arc<Signal> {
+        let (t, p) = if k == 0 {
+            self.reference
+        } else {
+            self.estimate
+        };
+        if method == OffsetMethod::Speed {
+            return self.cache.speed[k]
+                .get_or_init(|| Arc::new(speed_signal(t, p, params)))
+                .clone();
+        }
+        let (unsigned, signed) = self.cache.curvature[k].get_or_init(|| {
+            let (mut tu, mut u, mut sv) = (Vec::new(), Vec::new(), Vec::new());
+            for c in curvature_signature(t, p, &params.curvature) {
+                tu.push(c.t);
+                u.push(c.curvature);
+                sv.push(c.signed_curvature());
+            }
+            let ts = tu.clone();
+            (Arc::new((tu, u, Vec::new())), Arc::new((ts, sv, Vec::new())))
+        });
+        if method == OffsetMethod::Curvature {
+            unsigned.clone()
+        } else {
+            signed.clone()
+        }
+    }
+}
+
+/// `s` when it holds at least 3 samples.
+fn checked<S: std::ops::Deref<Target = Signal>>(s: S, method: OffsetMethod, what: &str) -> Result<S> {
+    if s.0.len() < 3 {
+        return Err(Error::TooFewSamples {
+            what: format!("{what} {} signal", method.as_str()),
+            n: s.0.len(),
+            need: 3,
+        });
+    }
+    Ok(s)
 }
 
 /// The search of one method over two signals already computed (times, values), `est` on the
@@ -388,10 +479,11 @@ fn gauss_newton_shift(
 /// The largest lateral lever arm taken out of the speed, metres.
 const MAX_SPEED_LEVER_M: f64 = 3.0;
 
-/// Times, values and (speed only) heading rates of one trajectory's signal for `method`.
+/// Times, values and (speed only; empty otherwise) heading rates of one trajectory's signal for
+/// `method`.
 pub type Signal = (Vec<f64>, Vec<f64>, Vec<f64>);
 
-/// The signal `method` correlates, computed once per trajectory (the profile windows reuse it).
+/// The signal `method` correlates, computed anew ([`Pair`] keeps them for reuse).
 pub fn method_signal(
     method: OffsetMethod,
     t: &[f64],
@@ -399,41 +491,36 @@ pub fn method_signal(
     params: &OffsetParams,
     what: &str,
 ) -> Result<Signal> {
+    let s = match method {
+        OffsetMethod::Speed => speed_signal(t, p, params),
+        _ => {
+            let signed = method != OffsetMethod::Curvature;
+            let mut s: Signal = (Vec::new(), Vec::new(), Vec::new());
+            for c in curvature_signature(t, p, &params.curvature) {
+                s.0.push(c.t);
+                s.1.push(if signed {
+                    c.signed_curvature()
+                } else {
+                    c.curvature
+                });
+            }
+            s
+        }
+    };
+    checked(Box::new(s), method, what).map(|s| *s)
+}
+
+/// The windowed speed and heading rate of one trajectory (see [`crate::align::speed`]).
+fn speed_signal(t: &[f64], p: &[Vector3<f64>], params: &OffsetParams) -> Signal {
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
+    let noise = isotropic_noise(t, p).unwrap_or(0.0);
     let mut s: Signal = (Vec::new(), Vec::new(), Vec::new());
-    match method {
-        OffsetMethod::Curvature => {
-            for c in curvature_signature(t, p, &params.curvature) {
-                s.0.push(c.t);
-                s.1.push(c.curvature);
-            }
-        }
-        OffsetMethod::SignedCurvature | OffsetMethod::Auto => {
-            for c in curvature_signature(t, p, &params.curvature) {
-                s.0.push(c.t);
-                s.1.push(c.signed_curvature());
-            }
-        }
-        OffsetMethod::Speed => {
-            let noise = isotropic_noise(t, p).unwrap_or(0.0);
-            for v in speed_profile(t, p, params.speed_window_s, gap, noise) {
-                s.0.push(v.t);
-                s.1.push(v.speed);
-                s.2.push(v.yaw_rate);
-            }
-        }
+    for v in speed_profile(t, p, params.speed_window_s, gap, noise) {
+        s.0.push(v.t);
+        s.1.push(v.speed);
+        s.2.push(v.yaw_rate);
     }
-    if s.0.len() < 3 {
-        return Err(Error::TooFewSamples {
-            what: format!("{what} {} signal", method.as_str()),
-            n: s.0.len(),
-            need: 3,
-        });
-    }
-    if s.2.is_empty() {
-        s.2 = vec![0.0; s.0.len()];
-    }
-    Ok(s)
+    s
 }
 
 /// The lateral lever arm d (metres, estimate sensor to the left of the reference's positive) that
@@ -594,21 +681,25 @@ fn search(
     })
 }
 
-/// The samples of `(t, v)` outside every interval of `exclude` (the grid does not interpolate across
-/// the hole when it is longer than the largest gap bridged).
-fn without((t, v, w): Signal, exclude: &[(f64, f64)]) -> Signal {
+/// The samples of a signal outside every interval of `exclude` (the grid does not interpolate across
+/// the hole when it is longer than the largest gap bridged); the signal itself when nothing is
+/// excluded.
+fn without<'s>(s: &'s Signal, exclude: &[(f64, f64)]) -> std::borrow::Cow<'s, Signal> {
     if exclude.is_empty() {
-        return (t, v, w);
+        return std::borrow::Cow::Borrowed(s);
     }
-    let mut out: Signal = (Vec::new(), Vec::new(), Vec::new());
-    for ((ti, vi), wi) in t.into_iter().zip(v).zip(w) {
-        if !exclude.iter().any(|&(a, b)| ti >= a && ti <= b) {
-            out.0.push(ti);
-            out.1.push(vi);
-            out.2.push(wi);
+    let kept: Vec<usize> = (0..s.0.len())
+        .filter(|&i| !exclude.iter().any(|&(a, b)| s.0[i] >= a && s.0[i] <= b))
+        .collect();
+    // The heading rates are empty for the curvature methods: they stay empty.
+    let pick = |v: &[f64]| -> Vec<f64> {
+        if v.is_empty() {
+            Vec::new()
+        } else {
+            kept.iter().map(|&i| v[i]).collect()
         }
-    }
-    out
+    };
+    std::borrow::Cow::Owned((pick(&s.0), pick(&s.1), pick(&s.2)))
 }
 
 fn check_params(p: &OffsetParams) -> Result<()> {

@@ -12,10 +12,10 @@ pub mod sweep;
 
 use rayon::prelude::*;
 
-use crate::align::auto_offset::auto_time_offset;
+use crate::align::auto_offset::auto_time_offset_of;
 use crate::align::auto_params::auto_params;
-use crate::align::clock_model::{clock_model, ClockModel, OffsetModel};
-use crate::align::time_offset::{OffsetEstimate, OffsetMethod, OffsetStatus};
+use crate::align::clock_model::{clock_model_of, ClockModel, OffsetModel};
+use crate::align::time_offset::{OffsetEstimate, OffsetMethod, OffsetStatus, Pair, SignalCache};
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult};
 use crate::report::json::{
@@ -237,6 +237,9 @@ fn evaluate_estimate(
     let mut warnings = Vec::new();
     // The clock model applied to the estimate's stamps (`None`: a constant `applied_s`).
     let mut clock: Option<ClockModel> = None;
+    // The methods' signals, computed once for the search, the `auto` re-run and the profile.
+    let cache = SignalCache::default();
+    let pair = Pair::new((&ref_t, ref_p), (&est_t, est_p), &cache);
 
     let time_offset = match config.time_offset_s {
         Some(dt) => TimeOffsetReport {
@@ -250,7 +253,7 @@ fn evaluate_estimate(
         },
         None => {
             let params = config.offset_params();
-            let auto = match auto_time_offset(&ref_t, ref_p, &est_t, est_p, &params) {
+            let auto = match auto_time_offset_of(&pair, &params) {
                 Ok(a) => a,
                 Err(e @ Error::NoOverlap { .. }) => return Err(clone_no_overlap(&e, &est.label)),
                 Err(e) => return Err(relabel(e, &est.label)),
@@ -288,8 +291,7 @@ fn evaluate_estimate(
                     let (report, model, w) = over_time(
                         config,
                         &params,
-                        (&ref_t, ref_p),
-                        (&est_t, est_p),
+                        &pair,
                         &o,
                         &est.name,
                         t0_ns,
@@ -501,18 +503,14 @@ fn drift_report(r: &DriftErrorResult, t0_s: f64) -> DriftErrorReport {
 fn over_time(
     config: &EvalConfig,
     params: &crate::align::time_offset::OffsetParams,
-    (ref_t, ref_p): (&[f64], &[nalgebra::Vector3<f64>]),
-    (est_t, est_p): (&[f64], &[nalgebra::Vector3<f64>]),
+    pair: &Pair<'_>,
     o: &OffsetEstimate,
     name: &str,
     t0_ns: i64,
 ) -> (TimeOffsetReport, Option<ClockModel>, Vec<Warning>) {
     let t0_s = t0_ns as f64 * 1e-9;
-    let found = clock_model(
-        ref_t,
-        ref_p,
-        est_t,
-        est_p,
+    let found = clock_model_of(
+        pair,
         params,
         o,
         &config.offset_profile,
