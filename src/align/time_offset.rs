@@ -438,8 +438,10 @@ fn gauss_newton_shift(
     gap: f64,
 ) -> Option<f64> {
     let h = 0.05;
-    let at = |t: f64| -> Option<f64> {
-        let i = rt.partition_point(|&x| x < t);
+    // Three cursors (t − h, t, t + h): the estimate's times rise, so each walks the reference once.
+    let cursors = [0usize; 3].map(std::cell::Cell::new);
+    let at = |t: f64, c: usize| -> Option<f64> {
+        let i = count_below(rt, t, &cursors[c]);
         if i == 0 || i >= rt.len() || rt[i] - rt[i - 1] > gap {
             return None;
         }
@@ -451,7 +453,8 @@ fn gauss_newton_shift(
         .zip(ev)
         .filter_map(|(&t, &e)| {
             let t = t + offset;
-            Some((e, at(t)?, (at(t + h)? - at(t - h)?) / (2.0 * h)))
+            let (r, up, down) = (at(t, 1), at(t + h, 2), at(t - h, 0));
+            Some((e, r?, (up? - down?) / (2.0 * h)))
         })
         .collect();
     let n = pts.len() as f64;
@@ -538,9 +541,10 @@ fn lateral_lever_from_speed(
     let offset_s = (offset_s / LEVER_GRID_S).round() * LEVER_GRID_S;
     let mut m = nalgebra::Matrix3::<f64>::zeros();
     let mut y = nalgebra::Vector3::<f64>::zeros();
+    let cursor = std::cell::Cell::new(0);
     for (&te, &v) in et.iter().zip(ev) {
         let t = te + offset_s;
-        let i = rt.partition_point(|&x| x < t);
+        let i = count_below(rt, t, &cursor);
         if i == 0 || i >= rt.len() || rt[i] - rt[i - 1] > gap {
             continue;
         }
@@ -563,6 +567,20 @@ fn lateral_lever_from_speed(
     // signals, which differ between frames by the noise estimate's rounding.
     let (d, a) = ((d * 100.0).round() / 100.0, (a * 1000.0).round() / 1000.0);
     (d.abs() <= MAX_SPEED_LEVER_M).then_some(d * a)
+}
+
+/// The number of times in `t` (non-decreasing) below `x`, as `t.partition_point(|&v| v < x)`, walked
+/// from the previous answer in `hint`: rising queries cost the walk, not a bisection each.
+fn count_below(t: &[f64], x: f64, hint: &std::cell::Cell<usize>) -> usize {
+    let mut i = hint.get().min(t.len());
+    while i < t.len() && t[i] < x {
+        i += 1;
+    }
+    while i > 0 && t[i - 1] >= x {
+        i -= 1;
+    }
+    hint.set(i);
+    i
 }
 
 /// The two-stage search (see the module doc) over two signals already computed.
