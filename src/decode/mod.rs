@@ -8,6 +8,7 @@ pub mod cdr;
 pub mod geodesy;
 pub mod ros1;
 pub mod ros2_msgs;
+pub mod ros2_prefix;
 pub mod ros2_schemas;
 pub mod sample;
 pub mod tf;

@@ -4,11 +4,8 @@
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
-use super::ros2_msgs::{
-    self, NavSatFix, Odometry, PointStamped, PoseStamped, PoseWithCovarianceStamped,
-    TransformStamped,
-};
-use super::{cdr, ros1};
+use super::ros2_msgs::{self, NavSatFix};
+use super::{cdr, ros1, ros2_prefix};
 
 /// A message type trajdrift reads as a trajectory.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -162,61 +159,69 @@ pub fn decode_message(
     data: &[u8],
 ) -> Result<Sample, String> {
     let local = |p: ros2_msgs::Point| SamplePosition::Local(Vector3::new(p.x, p.y, p.z));
-    // The ROS 1 reader yields the same structs as CDR decoding.
-    macro_rules! read {
-        ($ty:ty, $ros1:path) => {
-            match encoding {
-                Encoding::Cdr => cdr::decode::<$ty>(data)?,
-                Encoding::Ros1 => $ros1(data)?,
-            }
-        };
-    }
+    let posed = |stamp: ros2_msgs::Time, pose: ros2_msgs::Pose| Sample {
+        stamp_ns: stamp.to_ns(),
+        position: local(pose.position),
+        orientation: orientation(pose.orientation),
+    };
+    // CDR: only the leading fields a trajectory needs (see `ros2_prefix`). The ROS 1 reader yields
+    // the full structs.
+    let cdr = encoding == Encoding::Cdr;
     Ok(match kind {
-        MessageKind::PoseWithCovarianceStamped => {
-            let m = read!(
-                PoseWithCovarianceStamped,
-                ros1::pose_with_covariance_stamped
-            );
-            Sample {
-                stamp_ns: m.header.stamp.to_ns(),
-                position: local(m.pose.pose.position),
-                orientation: orientation(m.pose.pose.orientation),
-            }
+        MessageKind::PoseWithCovarianceStamped | MessageKind::PoseStamped if cdr => {
+            let m = cdr::decode::<ros2_prefix::StampedPose>(data)?;
+            posed(m.header.stamp, m.pose)
         }
-        MessageKind::TransformStamped => {
-            let m = read!(TransformStamped, ros1::transform_stamped);
-            Sample {
-                stamp_ns: m.header.stamp.to_ns(),
-                position: local(m.transform.translation),
-                orientation: orientation(m.transform.rotation),
-            }
+        MessageKind::PoseWithCovarianceStamped => {
+            let m = ros1::pose_with_covariance_stamped(data)?;
+            posed(m.header.stamp, m.pose.pose)
         }
         MessageKind::PoseStamped => {
-            let m = read!(PoseStamped, ros1::pose_stamped);
-            Sample {
-                stamp_ns: m.header.stamp.to_ns(),
-                position: local(m.pose.position),
-                orientation: orientation(m.pose.orientation),
-            }
+            let m = ros1::pose_stamped(data)?;
+            posed(m.header.stamp, m.pose)
+        }
+        MessageKind::Odometry if cdr => {
+            let m = cdr::decode::<ros2_prefix::OdometryPose>(data)?;
+            posed(m.header.stamp, m.pose)
         }
         MessageKind::Odometry => {
-            let m = read!(Odometry, ros1::odometry);
+            let m = ros1::odometry(data)?;
+            posed(m.header.stamp, m.pose.pose)
+        }
+        MessageKind::TransformStamped => {
+            let (stamp, t) = if cdr {
+                let m = cdr::decode::<ros2_prefix::StampedTransform>(data)?;
+                (m.header.stamp, m.transform)
+            } else {
+                let m = ros1::transform_stamped(data)?;
+                (m.header.stamp, m.transform)
+            };
             Sample {
-                stamp_ns: m.header.stamp.to_ns(),
-                position: local(m.pose.pose.position),
-                orientation: orientation(m.pose.pose.orientation),
+                stamp_ns: stamp.to_ns(),
+                position: local(t.translation),
+                orientation: orientation(t.rotation),
             }
         }
         MessageKind::PointStamped => {
-            let m = read!(PointStamped, ros1::point_stamped);
+            let (stamp, point) = if cdr {
+                let m = cdr::decode::<ros2_prefix::StampedPoint>(data)?;
+                (m.header.stamp, m.point)
+            } else {
+                let m = ros1::point_stamped(data)?;
+                (m.header.stamp, m.point)
+            };
             Sample {
-                stamp_ns: m.header.stamp.to_ns(),
-                position: local(m.point),
+                stamp_ns: stamp.to_ns(),
+                position: local(point),
                 orientation: None,
             }
         }
         MessageKind::NavSatFix => {
-            let m = read!(NavSatFix, ros1::nav_sat_fix);
+            let m = if cdr {
+                cdr::decode::<NavSatFix>(data)?
+            } else {
+                ros1::nav_sat_fix(data)?
+            };
             // STATUS_NO_FIX = -1; anything below FIX (0) is not a fix.
             let valid = m.status.status >= 0
                 && m.latitude.is_finite()
