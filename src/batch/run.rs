@@ -190,7 +190,12 @@ fn run_mission(
     });
     let mcap_name = format!("{}.mcap", m.name);
     let outcome = (|| -> Result<_> {
-        let (report, inputs) = evaluate_with_inputs(&m.config, &|b| {
+        // The annotated recording's aligned poses carry the estimate's orientation.
+        let config = crate::eval::config::EvalConfig {
+            keep_orientations: opts.annotate,
+            ..m.config.clone()
+        };
+        let (report, inputs) = evaluate_with_inputs(&config, &|b| {
             progress(BatchEvent::Read {
                 mission: &m.name,
                 bytes: b,

@@ -226,6 +226,9 @@ pub struct EvalConfig {
     pub offset_model: Option<crate::align::clock_model::OffsetModel>,
     /// `--offset-window`/`--offset-step` of the offset profile (`None`: from the data).
     pub offset_profile: crate::align::offset_profile::ProfileParams,
+    /// Keep the estimates' orientations even when no metric reads them (an output that writes
+    /// poses: the annotated recording). Not a user parameter: set by the command that writes.
+    pub keep_orientations: bool,
 }
 
 impl EvalConfig {
@@ -266,6 +269,7 @@ impl EvalConfig {
             metrics: Default::default(),
             offset_model: None,
             offset_profile: Default::default(),
+            keep_orientations: false,
         }
     }
 

@@ -38,6 +38,48 @@ pub struct Inputs {
     pub bytes: u64,
 }
 
+/// The estimate topics whose orientations nothing in this evaluation reads: the default Drift Error,
+/// APE (translation part) and RPE point distance need positions only, and RPE's translation part and
+/// KITTI drift need the reference's orientation too, so a reference without one (PointStamped,
+/// NavSatFix: the usual GNSS, prism or total station) makes the estimate's useless. Kept for levers
+/// (moved through the body frame), the aligned export and the annotated recording, and whenever the
+/// reference's type is unknown before the pass. Half of what a 200 Hz odometry costs in memory.
+fn positions_only(config: &EvalConfig, source: &dyn crate::sources::Source) -> Vec<String> {
+    let needed_elsewhere = config.keep_orientations
+        || config.export_aligned.is_some()
+        || config.reference_lever.is_some()
+        || !config.estimate_levers.is_empty();
+    let reference_oriented = match &config.reference.input {
+        TrajectoryInput::Topic(t) => source
+            .indexed_type(t)
+            .and_then(|ty| crate::decode::message_kind(&ty))
+            .is_none_or(|k| k.has_orientation()),
+        TrajectoryInput::TumFile(_) => true,
+    };
+    let read_by_metrics = (config.metrics.rpe || config.metrics.kitti) && reference_oriented;
+    if needed_elsewhere || read_by_metrics {
+        return Vec::new();
+    }
+    config
+        .estimates
+        .iter()
+        .filter_map(|e| match &e.input {
+            TrajectoryInput::Topic(t) if *t != topic_name(&config.reference.input) => {
+                Some(t.clone())
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// The topic of an input ("" for a file).
+fn topic_name(input: &TrajectoryInput) -> String {
+    match input {
+        TrajectoryInput::Topic(t) => t.clone(),
+        TrajectoryInput::TumFile(_) => String::new(),
+    }
+}
+
 /// Reads every input of `config`.
 pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
     let all: Vec<&NamedInput> = std::iter::once(&config.reference)
@@ -78,6 +120,7 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
                     stamp: config.stamp,
                     origin: config.origin,
                     static_lookups: lookups.clone(),
+                    positions_only: positions_only(config, source.as_ref()),
                 };
                 extraction = Some(source.extract(&unique, &options, progress)?);
             } else if !lookups.is_empty() {

@@ -35,6 +35,13 @@ impl<R: Recording> Source for R {
         Ok(topic_infos(channels, &counts))
     }
 
+    fn indexed_type(&self, topic: &str) -> Option<String> {
+        self.known_channels()?
+            .into_iter()
+            .find(|c| c.topic == topic)
+            .map(|c| c.schema_name)
+    }
+
     fn extract(
         &self,
         topics: &[String],
@@ -168,10 +175,11 @@ struct Accumulator {
 }
 
 impl Accumulator {
-    fn new(kind: MessageKind) -> Self {
+    /// `positions_only`: drop the orientations (see [`ExtractOptions::positions_only`]).
+    fn new(kind: MessageKind, positions_only: bool) -> Self {
         Accumulator {
             kind,
-            trajectory: Trajectory::new(kind.has_orientation()),
+            trajectory: Trajectory::new(kind.has_orientation() && !positions_only),
             messages: 0,
             invalid_dropped: 0,
         }
@@ -233,6 +241,7 @@ pub fn extract(
         }
     }
     let mut accumulators: Vec<Option<Accumulator>> = unique.iter().map(|_| None).collect();
+    let positions_only = |topic: &str| options.positions_only.iter().any(|t| t == topic);
     // Channel id → (accumulator index, encoding), `None` for a channel whose type differs from the
     // topic's first.
     let mut route: HashMap<u16, Option<(usize, Encoding)>> = HashMap::new();
@@ -258,7 +267,8 @@ pub fn extract(
             let slot = *route.entry(c.id).or_insert_with(|| {
                 let i = unique.iter().position(|t| *t == c.topic)?;
                 let (kind, encoding) = channel_kind(c)?;
-                let acc = accumulators[i].get_or_insert_with(|| Accumulator::new(kind));
+                let acc = accumulators[i]
+                    .get_or_insert_with(|| Accumulator::new(kind, positions_only(unique[i])));
                 // Two channels of one topic with different types: reported after the pass.
                 (acc.kind == kind).then_some((i, encoding))
             });
@@ -356,7 +366,7 @@ pub fn extract(
                     .iter()
                     .filter(|c| c.topic == *topic)
                     .find_map(channel_kind)
-                    .map(|(kind, _)| Accumulator::new(kind))
+                    .map(|(kind, _)| Accumulator::new(kind, positions_only(topic)))
             })
             .ok_or_else(|| Error::InvalidArgument(format!("{topic}: no readable channel")))
         })

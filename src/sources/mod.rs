@@ -45,6 +45,9 @@ pub struct ExtractOptions {
     /// (FROM, TO) frame pairs whose constant `/tf_static` transform (TO's pose in FROM) is wanted, for
     /// `tf-static:` levers; answered in [`Extraction::static_transforms`] by the same pass.
     pub static_lookups: Vec<(String, String)>,
+    /// Drop the orientations of these topics (positions only): 32 bytes a sample that nothing
+    /// downstream reads (see `crate::eval::inputs`).
+    pub positions_only: Vec<String>,
 }
 
 /// The answer to one [`ExtractOptions::static_lookups`] entry.
@@ -120,6 +123,12 @@ pub trait Source {
     fn size_bytes(&self) -> u64;
     /// The channels of the source.
     fn topics(&self) -> Result<Vec<TopicInfo>>;
+    /// The type of `topic` when an index lists it without a pass over the messages (`None`: unknown
+    /// without reading the file, or no such topic).
+    fn indexed_type(&self, topic: &str) -> Option<String> {
+        let _ = topic;
+        None
+    }
     /// Reads the trajectories of `topics` in one streaming pass. Memory follows the extracted samples.
     fn extract(
         &self,

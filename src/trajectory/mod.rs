@@ -61,6 +61,10 @@ impl Trajectory {
     /// some drivers publish the same stamp twice; every method needs strictly increasing time.
     pub fn sort_dedup(&mut self) -> usize {
         let n = self.len();
+        if self.stamps_ns.windows(2).all(|w| w[0] < w[1]) {
+            // Already in order (the usual case): no index or copy the size of the trajectory.
+            return 0;
+        }
         let mut idx: Vec<usize> = (0..n).collect();
         idx.sort_by_key(|&i| self.stamps_ns[i]);
         let mut keep: Vec<usize> = Vec::with_capacity(n);

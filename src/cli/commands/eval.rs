@@ -102,7 +102,9 @@ pub fn pictures_from_args(
 
 /// Runs the command; returns the exit code.
 pub fn run(a: EvalArgs) -> Result<u8> {
-    let (config, notes) = config_from_args(&a)?;
+    let (mut config, notes) = config_from_args(&a)?;
+    // The annotated recording's aligned poses carry the estimate's orientation.
+    config.keep_orientations = a.annotate.is_some();
     if !a.quiet {
         for n in &notes {
             eprintln!("note: {}", trajdrift::report::escape::escape(n));
