@@ -74,9 +74,21 @@ pub fn curvature_signature(
     positions: &[Vector3<f64>],
     params: &CurvatureParams,
 ) -> Vec<CurvatureSample> {
+    let mut out = Vec::new();
+    curvature_signature_each(times, positions, params, |s| out.push(s));
+    out
+}
+
+/// [`curvature_signature`], each defined sample handed to `out` as it is computed (the caller keeps
+/// what it needs, not 56 bytes a sample).
+pub fn curvature_signature_each(
+    times: &[f64],
+    positions: &[Vector3<f64>],
+    params: &CurvatureParams,
+    mut out: impl FnMut(CurvatureSample),
+) {
     let n = times.len().min(positions.len());
     let chords = Chords::new(&times[..n], &positions[..n], params);
-    let mut out = Vec::new();
     for i in 0..n {
         let pi = positions[i];
         let Some(j) = chords.before(i) else { continue };
@@ -88,7 +100,7 @@ pub fn curvature_signature(
         if turn.is_nan() || turn > params.theta_max_rad {
             continue;
         }
-        out.push(CurvatureSample {
+        out(CurvatureSample {
             index: i,
             t: times[i],
             curvature: 2.0 * turn / (s1 + s2),
@@ -98,7 +110,6 @@ pub fn curvature_signature(
             chord_after_m: s2,
         });
     }
-    out
 }
 
 /// Samples per block of the chord search's first level; the second level groups this many blocks.

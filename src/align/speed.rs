@@ -48,17 +48,33 @@ pub fn speed_profile(
     max_gap_s: f64,
     noise_m: f64,
 ) -> Vec<SpeedSample> {
-    let bias = 6.0 * noise_m * noise_m;
-    let idx: Vec<usize> = (0..times.len().min(positions.len()))
-        .filter(|&i| times[i].is_finite() && positions[i].iter().all(|v| v.is_finite()))
-        .collect();
-    let n = idx.len();
     let mut out = Vec::new();
+    speed_profile_each(times, positions, window_s, max_gap_s, noise_m, |s| out.push(s));
+    out
+}
+
+/// [`speed_profile`], each sample handed to `out` as it is computed (the caller keeps what it needs,
+/// not a copy of the whole profile).
+pub fn speed_profile_each(
+    times: &[f64],
+    positions: &[Vector3<f64>],
+    window_s: f64,
+    max_gap_s: f64,
+    noise_m: f64,
+    mut out: impl FnMut(SpeedSample),
+) {
+    let bias = 6.0 * noise_m * noise_m;
+    let len = times.len().min(positions.len());
+    let finite = |i: usize| times[i].is_finite() && positions[i].iter().all(|v| v.is_finite());
+    // The finite samples' indices, materialised only when some sample is not finite.
+    let idx: Option<Vec<usize>> = (!(0..len).all(finite)).then(|| (0..len).filter(|&i| finite(i)).collect());
+    let n = idx.as_ref().map_or(len, Vec::len);
     if n < 2 || window_s.is_nan() || window_s <= 0.0 {
-        return out;
+        return;
     }
-    let t = |k: usize| times[idx[k]];
-    let p = |k: usize| positions[idx[k]];
+    let at = |k: usize| idx.as_ref().map_or(k, |v| v[k]);
+    let t = |k: usize| times[at(k)];
+    let p = |k: usize| positions[at(k)];
     // next_gap[k]: the first m ≥ k with t(m+1) − t(m) > max_gap_s (n − 1 when there is none). A
     // chord j..k is gap-free iff next_gap[j] ≥ k.
     let mut next_gap = vec![n - 1; n];
@@ -89,13 +105,12 @@ pub fn speed_profile(
             continue;
         }
         last = Some((j, k));
-        out.push(SpeedSample {
+        out(SpeedSample {
             t: 0.5 * (t(j) + t(k)),
             speed: ((p(k) - p(j)).norm_squared() - bias).max(0.0).sqrt() / span,
             yaw_rate: heading_rate(&t, &p, j, i, k, noise_m),
         });
     }
-    out
 }
 
 /// The turn from chord j→m to chord m→k over the time between their mid-points, rad/s; 0 when

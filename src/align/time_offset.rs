@@ -33,11 +33,11 @@ use std::sync::{Arc, OnceLock};
 
 use nalgebra::Vector3;
 
-use crate::align::curvature::{curvature_signature, CurvatureParams};
+use crate::align::curvature::{curvature_signature, curvature_signature_each, CurvatureParams};
 use crate::align::fine_sums::fine_sums;
 use crate::align::grid::resample;
 use crate::align::offset_sigma::offset_sigma;
-use crate::align::speed::speed_profile;
+use crate::align::speed::speed_profile_each;
 use crate::align::xcorr::{masked_ncc, Centering};
 use crate::error::{Error, Result};
 
@@ -336,11 +336,11 @@ impl<'a> Pair<'a> {
         }
         let (unsigned, signed) = self.cache.curvature[k].get_or_init(|| {
             let (mut tu, mut u, mut sv) = (Vec::new(), Vec::new(), Vec::new());
-            for c in curvature_signature(t, p, &params.curvature) {
+            curvature_signature_each(t, p, &params.curvature, |c| {
                 tu.push(c.t);
                 u.push(c.curvature);
                 sv.push(c.signed_curvature());
-            }
+            });
             let ts = tu.clone();
             (Arc::new((tu, u, Vec::new())), Arc::new((ts, sv, Vec::new())))
         });
@@ -403,8 +403,10 @@ fn isotropic_noise(t: &[f64], p: &[Vector3<f64>]) -> Option<f64> {
         return None;
     }
     let mut steps: Vec<f64> = t[..n].windows(2).map(|w| w[1] - w[0]).collect();
-    steps.sort_by(f64::total_cmp);
-    let typical = steps[steps.len() / 2];
+    // The median by selection (the element a full sort puts there, in linear time).
+    let mid = steps.len() / 2;
+    let typical = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+    drop(steps);
     if typical.is_nan() || typical <= 0.0 {
         return None;
     }
@@ -417,8 +419,8 @@ fn isotropic_noise(t: &[f64], p: &[Vector3<f64>]) -> Option<f64> {
     if d3.len() < 30 {
         return None;
     }
-    d3.sort_by(f64::total_cmp);
-    Some(d3[d3.len() / 2] / (20f64.sqrt() * 1.538))
+    let mid = d3.len() / 2;
+    Some(*d3.select_nth_unstable_by(mid, f64::total_cmp).1 / (20f64.sqrt() * 1.538))
 }
 
 /// The offset at which a lateral lever is measured is rounded to this, seconds.
@@ -518,11 +520,11 @@ fn speed_signal(t: &[f64], p: &[Vector3<f64>], params: &OffsetParams) -> Signal 
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
     let noise = isotropic_noise(t, p).unwrap_or(0.0);
     let mut s: Signal = (Vec::new(), Vec::new(), Vec::new());
-    for v in speed_profile(t, p, params.speed_window_s, gap, noise) {
+    speed_profile_each(t, p, params.speed_window_s, gap, noise, |v| {
         s.0.push(v.t);
         s.1.push(v.speed);
         s.2.push(v.yaw_rate);
-    }
+    });
     s
 }
 
