@@ -127,20 +127,22 @@ pub fn masked_ncc(
     let fwd = planner.plan_fft_forward(len);
     let inv = planner.plan_fft_inverse(len);
     // Two real sequences per complex FFT (x in the real part, y in the imaginary part) halves the
-    // transforms; they are separated again in the frequency domain.
+    // transforms; they are separated again in the frequency domain, in place (bins f and len − f
+    // together), so a pair costs two buffers.
     let spectrum_pair = |x: &dyn Fn(usize) -> f64, y: &dyn Fn(usize) -> f64, n: usize| {
-        let mut buf = vec![Complex::new(0.0, 0.0); len];
-        for (j, c) in buf.iter_mut().enumerate().take(n) {
+        let mut fx = vec![Complex::new(0.0, 0.0); len];
+        for (j, c) in fx.iter_mut().enumerate().take(n) {
             *c = Complex::new(x(j), y(j));
         }
-        fwd.process(&mut buf);
-        let mut fx = vec![Complex::new(0.0, 0.0); len];
+        fwd.process(&mut fx);
         let mut fy = vec![Complex::new(0.0, 0.0); len];
-        for f in 0..len {
-            let z = buf[f];
-            let zc = buf[(len - f) % len].conj();
-            fx[f] = (z + zc) * 0.5;
-            fy[f] = (z - zc) * Complex::new(0.0, -0.5);
+        for f in 0..=len / 2 {
+            let g = (len - f) % len;
+            let (z, w) = (fx[f], fx[g]);
+            fx[f] = (z + w.conj()) * 0.5;
+            fy[f] = (z - w.conj()) * Complex::new(0.0, -0.5);
+            fx[g] = (w + z.conj()) * 0.5;
+            fy[g] = (w - z.conj()) * Complex::new(0.0, -0.5);
         }
         (fx, fy)
     };
@@ -148,45 +150,56 @@ pub fn masked_ncc(
     let mb = |j: usize| if mask_b[j] > 0.5 { 1.0 } else { 0.0 };
     let av = |j: usize| if mask_a[j] > 0.5 { a[j] } else { 0.0 };
     let bv = |j: usize| if mask_b[j] > 0.5 { b[j] } else { 0.0 };
-    let (f_a, f_ma) = spectrum_pair(&av, &ma, na);
-    let (f_b, f_mb) = spectrum_pair(&bv, &mb, nb);
-    let (f_aa, _) = spectrum_pair(&|j| av(j) * av(j), &|_| 0.0, na);
-    let (f_bb, _) = spectrum_pair(&|j| bv(j) * bv(j), &|_| 0.0, nb);
     // Correlation c[k] = Σ_j x[j]·y[j+k] = IFFT(conj(X)·Y)[k mod len]. Two correlations share one
-    // inverse FFT: both are real, so c1 + i·c2 comes back in the real and imaginary parts.
+    // inverse FFT: both are real, so c1 + i·c2 comes back in the real and imaginary parts. Only the
+    // searched lags are kept, and each spectrum is dropped once no correlation needs it (a coarse
+    // search of a 2-hour mission holds four of eight megabytes each, not nine).
+    let at_lags = |mut buf: Vec<Complex<f64>>| -> Vec<Complex<f64>> {
+        inv.process(&mut buf);
+        let scale = 1.0 / len as f64;
+        (0..lags)
+            .map(|i| buf[(lag_min + i as i64).rem_euclid(len as i64) as usize] * scale)
+            .collect()
+    };
     let corr_pair =
         |x1: &[Complex<f64>], y1: &[Complex<f64>], x2: &[Complex<f64>], y2: &[Complex<f64>]| {
-            let mut buf: Vec<Complex<f64>> = (0..len)
-                .map(|f| x1[f].conj() * y1[f] + Complex::new(0.0, 1.0) * (x2[f].conj() * y2[f]))
-                .collect();
-            inv.process(&mut buf);
-            let scale = 1.0 / len as f64;
-            buf.iter_mut().for_each(|c| *c *= scale);
-            buf
+            at_lags(
+                (0..len)
+                    .map(|f| {
+                        x1[f].conj() * y1[f] + Complex::new(0.0, 1.0) * (x2[f].conj() * y2[f])
+                    })
+                    .collect(),
+            )
         };
+    let (f_a, f_ma) = spectrum_pair(&av, &ma, na);
+    let (f_b, f_mb) = spectrum_pair(&bv, &mb, nb);
     let ab_n = corr_pair(&f_a, &f_b, &f_ma, &f_mb);
-    let aa_bb = corr_pair(&f_aa, &f_mb, &f_ma, &f_bb);
     let sa_sb = match centering {
         Centering::MeanRemoved => Some(corr_pair(&f_a, &f_mb, &f_ma, &f_b)),
         Centering::Raw => None,
     };
+    drop((f_a, f_b));
+    let squares = |j: usize, n: usize, v: &dyn Fn(usize) -> f64| if j < n { v(j) * v(j) } else { 0.0 };
+    let (f_aa, f_bb) = spectrum_pair(
+        &|j| squares(j, na, &av),
+        &|j| squares(j, nb, &bv),
+        na.max(nb),
+    );
+    let aa_bb = corr_pair(&f_aa, &f_mb, &f_ma, &f_bb);
     for i in 0..lags {
         let k = lag_min + i as i64;
         if k <= -(na as i64) || k >= nb as i64 {
             continue;
         }
-        let idx = k.rem_euclid(len as i64) as usize;
-        let n = ab_n[idx].im.round().max(0.0);
-        let (sa, sb) = sa_sb
-            .as_ref()
-            .map_or((0.0, 0.0), |s| (s[idx].re, s[idx].im));
+        let n = ab_n[i].im.round().max(0.0);
+        let (sa, sb) = sa_sb.as_ref().map_or((0.0, 0.0), |s| (s[i].re, s[i].im));
         let sums = OverlapSums {
             n,
             sa,
             sb,
-            sab: ab_n[idx].re,
-            saa: aa_bb[idx].re.max(0.0),
-            sbb: aa_bb[idx].im.max(0.0),
+            sab: ab_n[i].re,
+            saa: aa_bb[i].re.max(0.0),
+            sbb: aa_bb[i].im.max(0.0),
         };
         out.overlap[i] = n as usize;
         out.ncc[i] = sums.ncc(centering);
