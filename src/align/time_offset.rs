@@ -335,13 +335,22 @@ impl<'a> Pair<'a> {
                 .clone();
         }
         let (unsigned, signed) = self.cache.curvature[k].get_or_init(|| {
-            let (mut tu, mut u, mut sv) = (Vec::new(), Vec::new(), Vec::new());
+            // At most one value a sample: reserved once (no doubling, no slack).
+            let n = t.len();
+            let (mut tu, mut u, mut sv) = (
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+            );
             curvature_signature_each(t, p, &params.curvature, |c| {
                 tu.push(c.t);
                 u.push(c.curvature);
                 sv.push(c.signed_curvature());
             });
             let ts = tu.clone();
+            tu.shrink_to_fit();
+            u.shrink_to_fit();
+            sv.shrink_to_fit();
             (Arc::new((tu, u, Vec::new())), Arc::new((ts, sv, Vec::new())))
         });
         if method == OffsetMethod::Curvature {
@@ -519,12 +528,21 @@ pub fn method_signal(
 fn speed_signal(t: &[f64], p: &[Vector3<f64>], params: &OffsetParams) -> Signal {
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
     let noise = isotropic_noise(t, p).unwrap_or(0.0);
-    let mut s: Signal = (Vec::new(), Vec::new(), Vec::new());
+    // At most one value a sample: reserved once (no doubling, no slack).
+    let n = t.len();
+    let mut s: Signal = (
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+    );
     speed_profile_each(t, p, params.speed_window_s, gap, noise, |v| {
         s.0.push(v.t);
         s.1.push(v.speed);
         s.2.push(v.yaw_rate);
     });
+    s.0.shrink_to_fit();
+    s.1.shrink_to_fit();
+    s.2.shrink_to_fit();
     s
 }
 

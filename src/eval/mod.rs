@@ -237,9 +237,6 @@ fn evaluate_estimate(
     let mut warnings = Vec::new();
     // The clock model applied to the estimate's stamps (`None`: a constant `applied_s`).
     let mut clock: Option<ClockModel> = None;
-    // The methods' signals, computed once for the search, the `auto` re-run and the profile.
-    let cache = SignalCache::default();
-    let pair = Pair::new((&ref_t, ref_p), (&est_t, est_p), &cache);
 
     let time_offset = match config.time_offset_s {
         Some(dt) => TimeOffsetReport {
@@ -252,6 +249,10 @@ fn evaluate_estimate(
             ..Default::default()
         },
         None => {
+            // The methods' signals, computed once for the search, the `auto` re-run and the
+            // profile, and dropped with this arm (before the metrics copy the trajectories).
+            let cache = SignalCache::default();
+            let pair = Pair::new((&ref_t, ref_p), (&est_t, est_p), &cache);
             let params = config.offset_params();
             let auto = match auto_time_offset_of(&pair, &params) {
                 Ok(a) => a,

@@ -111,17 +111,20 @@ pub fn standard_metrics(
         ..PairSelection::default()
     });
     let mut out = StandardMetrics::default();
-    let mut run = |name: &str, metric: Metric, relation: PoseRelation| match evaluate(
-        poses(reference),
-        poses(estimate),
-        metric,
-        relation,
-        &aligned,
-    ) {
-        Ok(r) => Some(r),
-        Err(e) => {
-            out.notes.push(format!("{name}: {e}"));
-            None
+    let oriented = reference.orientations.is_some() && estimate.orientations.is_some();
+    let mut run = |name: &str, metric: Metric, relation: PoseRelation| {
+        // Without orientations an answer that needs them is known before copying millions of poses.
+        let result = if !oriented && super::needs_orientation(metric, relation, aligned.alignment) {
+            Err(super::rpe::needs_orientation(&format!("RPE -r {}", relation.as_str())))
+        } else {
+            evaluate(poses(reference), poses(estimate), metric, relation, &aligned)
+        };
+        match result {
+            Ok(r) => Some(r),
+            Err(e) => {
+                out.notes.push(format!("{name}: {e}"));
+                None
+            }
         }
     };
     if set.ape {
