@@ -136,9 +136,8 @@ impl<'a> Chords<'a> {
         let boxes = |size: usize| -> Vec<[Vector3<f64>; 2]> {
             p.chunks(size)
                 .map(|c| {
-                    c.iter().fold([c[0], c[0]], |[lo, hi], q| {
-                        [lo.inf(q), hi.sup(q)]
-                    })
+                    c.iter()
+                        .fold([c[0], c[0]], |[lo, hi], q| [lo.inf(q), hi.sup(q)])
                 })
                 .collect()
         };
@@ -161,7 +160,11 @@ impl<'a> Chords<'a> {
 
     /// The whole block of `size` samples starting at `k`, when it is aligned and complete.
     fn block(&self, k: usize, size: usize) -> Option<&[Vector3<f64>; 2]> {
-        let boxes = if size == CHORD_BLOCK { &self.small } else { &self.large };
+        let boxes = if size == CHORD_BLOCK {
+            &self.small
+        } else {
+            &self.large
+        };
         (k % size == 0 && k + size <= self.p.len()).then(|| &boxes[k / size])
     }
 
@@ -204,7 +207,10 @@ impl<'a> Chords<'a> {
                 return None;
             }
             let skip = |size: usize| {
-                end >= size && self.block(end - size, size).is_some_and(|b| self.inside(&pi, b))
+                end >= size
+                    && self
+                        .block(end - size, size)
+                        .is_some_and(|b| self.inside(&pi, b))
             };
             if skip(CHORD_BLOCK * CHORD_BLOCK) {
                 end -= CHORD_BLOCK * CHORD_BLOCK;
@@ -279,7 +285,12 @@ mod tests {
     }
 
     /// The sample-by-sample scan of eq. (1)'s chords, as first written.
-    fn scan(t: &[f64], p: &[Vector3<f64>], params: &CurvatureParams, i: usize) -> Option<(usize, usize)> {
+    fn scan(
+        t: &[f64],
+        p: &[Vector3<f64>],
+        params: &CurvatureParams,
+        i: usize,
+    ) -> Option<(usize, usize)> {
         let eps2 = params.eps_m * params.eps_m;
         let before = (0..i)
             .rev()
@@ -296,7 +307,9 @@ mod tests {
         // A noisy walk at 200 Hz with stands (noise only) of 0.5 to 20 s, turns and a jump.
         let mut x = 7u64;
         let mut rnd = || {
-            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (x >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
         let (mut t, mut p) = (vec![], vec![]);
@@ -315,8 +328,16 @@ mod tests {
         }
         for params in [
             CurvatureParams::default(),
-            CurvatureParams { eps_m: 0.5, dt_max_s: 30.0, ..Default::default() },
-            CurvatureParams { eps_m: 0.01, dt_max_s: 0.5, ..Default::default() },
+            CurvatureParams {
+                eps_m: 0.5,
+                dt_max_s: 30.0,
+                ..Default::default()
+            },
+            CurvatureParams {
+                eps_m: 0.01,
+                dt_max_s: 0.5,
+                ..Default::default()
+            },
         ] {
             let chords = Chords::new(&t, &p, &params);
             for i in 0..t.len() {

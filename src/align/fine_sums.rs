@@ -234,8 +234,7 @@ fn sums_against_runs(
         // One block of D's grid from the first pending run's reach; every run that fits in it.
         let j0 = runs[i].m0 + kmin;
         let mut end = i;
-        while end < runs.len()
-            && runs[end].m0 + runs[end].len as i64 - 1 + kmax < j0 + block as i64
+        while end < runs.len() && runs[end].m0 + runs[end].len as i64 - 1 + kmax < j0 + block as i64
         {
             end += 1;
         }
@@ -300,7 +299,9 @@ mod tests {
     fn signal(t0: f64, span: f64, rate: f64, seed: u64) -> (Vec<f64>, Vec<f64>) {
         let mut x = seed;
         let mut rnd = || {
-            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (x >> 11) as f64 / (1u64 << 53) as f64
         };
         let (mut t, mut v) = (vec![], vec![]);
@@ -336,7 +337,10 @@ mod tests {
             let fast = fine_sums((&et, &ev), (&rt, &rv), 0.001, 0.5, lo, hi);
             let slow = direct((&et, &ev), (&rt, &rv), 0.001, 0.5, lo, hi);
             assert_eq!(fast.len(), slow.len());
-            assert!(slow.iter().any(|s| s.n > 1000.0), "rates {er}/{rr}: no overlap");
+            assert!(
+                slow.iter().any(|s| s.n > 1000.0),
+                "rates {er}/{rr}: no overlap"
+            );
             for (f, s) in fast.iter().zip(&slow) {
                 let scale = s.n.max(s.saa).max(s.sbb);
                 assert!(

@@ -69,7 +69,14 @@ pub fn resample_on_grid(
 ) -> RegularSignal {
     let n = times.len().min(values.len());
     if (0..n).all(|k| times[k].is_finite() && values[k].is_finite()) {
-        return resample_finite_on_grid(&times[..n], &values[..n], step, first_index, len, max_gap_s);
+        return resample_finite_on_grid(
+            &times[..n],
+            &values[..n],
+            step,
+            first_index,
+            len,
+            max_gap_s,
+        );
     }
     let (t, v): (Vec<f64>, Vec<f64>) = times
         .iter()

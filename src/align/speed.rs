@@ -49,7 +49,9 @@ pub fn speed_profile(
     noise_m: f64,
 ) -> Vec<SpeedSample> {
     let mut out = Vec::new();
-    speed_profile_each(times, positions, window_s, max_gap_s, noise_m, |s| out.push(s));
+    speed_profile_each(times, positions, window_s, max_gap_s, noise_m, |s| {
+        out.push(s)
+    });
     out
 }
 
@@ -67,7 +69,8 @@ pub fn speed_profile_each(
     let len = times.len().min(positions.len());
     let finite = |i: usize| times[i].is_finite() && positions[i].iter().all(|v| v.is_finite());
     // The finite samples' indices, materialised only when some sample is not finite.
-    let idx: Option<Vec<usize>> = (!(0..len).all(finite)).then(|| (0..len).filter(|&i| finite(i)).collect());
+    let idx: Option<Vec<usize>> =
+        (!(0..len).all(finite)).then(|| (0..len).filter(|&i| finite(i)).collect());
     let n = idx.as_ref().map_or(len, Vec::len);
     if n < 2 || window_s.is_nan() || window_s <= 0.0 {
         return;

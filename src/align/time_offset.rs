@@ -351,7 +351,10 @@ impl<'a> Pair<'a> {
             tu.shrink_to_fit();
             u.shrink_to_fit();
             sv.shrink_to_fit();
-            (Arc::new((tu, u, Vec::new())), Arc::new((ts, sv, Vec::new())))
+            (
+                Arc::new((tu, u, Vec::new())),
+                Arc::new((ts, sv, Vec::new())),
+            )
         });
         if method == OffsetMethod::Curvature {
             unsigned.clone()
@@ -362,7 +365,11 @@ impl<'a> Pair<'a> {
 }
 
 /// `s` when it holds at least 3 samples.
-fn checked<S: std::ops::Deref<Target = Signal>>(s: S, method: OffsetMethod, what: &str) -> Result<S> {
+fn checked<S: std::ops::Deref<Target = Signal>>(
+    s: S,
+    method: OffsetMethod,
+    what: &str,
+) -> Result<S> {
     if s.0.len() < 3 {
         return Err(Error::TooFewSamples {
             what: format!("{what} {} signal", method.as_str()),

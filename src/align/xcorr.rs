@@ -165,9 +165,7 @@ pub fn masked_ncc(
         |x1: &[Complex<f64>], y1: &[Complex<f64>], x2: &[Complex<f64>], y2: &[Complex<f64>]| {
             at_lags(
                 (0..len)
-                    .map(|f| {
-                        x1[f].conj() * y1[f] + Complex::new(0.0, 1.0) * (x2[f].conj() * y2[f])
-                    })
+                    .map(|f| x1[f].conj() * y1[f] + Complex::new(0.0, 1.0) * (x2[f].conj() * y2[f]))
                     .collect(),
             )
         };
@@ -179,7 +177,8 @@ pub fn masked_ncc(
         Centering::Raw => None,
     };
     drop((f_a, f_b));
-    let squares = |j: usize, n: usize, v: &dyn Fn(usize) -> f64| if j < n { v(j) * v(j) } else { 0.0 };
+    let squares =
+        |j: usize, n: usize, v: &dyn Fn(usize) -> f64| if j < n { v(j) * v(j) } else { 0.0 };
     let (f_aa, f_bb) = spectrum_pair(
         &|j| squares(j, na, &av),
         &|j| squares(j, nb, &bv),

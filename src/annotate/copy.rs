@@ -116,8 +116,13 @@ pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
         };
         let (opcode, data) = match event {
             LinearReadEvent::ReadRequest(need) => {
-                let n = fill(&mut reader, &mut file, need, file_size.saturating_sub(bytes_read))
-                    .map_err(|e| Error::io(input, e))?;
+                let n = fill(
+                    &mut reader,
+                    &mut file,
+                    need,
+                    file_size.saturating_sub(bytes_read),
+                )
+                .map_err(|e| Error::io(input, e))?;
                 bytes_read += n as u64;
                 if bytes_read - last_progress >= PROGRESS_STEP {
                     last_progress = bytes_read;

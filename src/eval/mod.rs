@@ -289,14 +289,8 @@ fn evaluate_estimate(
             };
             match chosen {
                 Some(Ok(o)) if o.status == OffsetStatus::Ok => {
-                    let (report, model, w) = over_time(
-                        config,
-                        &params,
-                        &pair,
-                        &o,
-                        &est.name,
-                        t0_ns,
-                    );
+                    let (report, model, w) =
+                        over_time(config, &params, &pair, &o, &est.name, t0_ns);
                     warnings.extend(w);
                     clock = model;
                     TimeOffsetReport {
@@ -510,13 +504,7 @@ fn over_time(
     t0_ns: i64,
 ) -> (TimeOffsetReport, Option<ClockModel>, Vec<Warning>) {
     let t0_s = t0_ns as f64 * 1e-9;
-    let found = clock_model_of(
-        pair,
-        params,
-        o,
-        &config.offset_profile,
-        config.offset_model,
-    );
+    let found = clock_model_of(pair, params, o, &config.offset_profile, config.offset_model);
     let Ok((profile, model)) = found else {
         let reason = "constant: no offset profile (too short an overlap)".to_string();
         return (

@@ -115,9 +115,18 @@ pub fn standard_metrics(
     let mut run = |name: &str, metric: Metric, relation: PoseRelation| {
         // Without orientations an answer that needs them is known before copying millions of poses.
         let result = if !oriented && super::needs_orientation(metric, relation, aligned.alignment) {
-            Err(super::rpe::needs_orientation(&format!("RPE -r {}", relation.as_str())))
+            Err(super::rpe::needs_orientation(&format!(
+                "RPE -r {}",
+                relation.as_str()
+            )))
         } else {
-            evaluate(poses(reference), poses(estimate), metric, relation, &aligned)
+            evaluate(
+                poses(reference),
+                poses(estimate),
+                metric,
+                relation,
+                &aligned,
+            )
         };
         match result {
             Ok(r) => Some(r),

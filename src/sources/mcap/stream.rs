@@ -73,8 +73,13 @@ where
         };
         match event {
             LinearReadEvent::ReadRequest(need) => {
-                let n = fill(&mut reader, &mut file, need, file_size.saturating_sub(out.bytes_read))
-                    .map_err(|e| Error::io(path, e))?;
+                let n = fill(
+                    &mut reader,
+                    &mut file,
+                    need,
+                    file_size.saturating_sub(out.bytes_read),
+                )
+                .map_err(|e| Error::io(path, e))?;
                 out.bytes_read += n as u64;
                 if out.bytes_read - last_progress >= PROGRESS_STEP {
                     last_progress = out.bytes_read;
@@ -200,9 +205,11 @@ pub(crate) fn fill(
     need: usize,
     left: u64,
 ) -> std::io::Result<usize> {
-    let want = need
-        .max(MIN_READ)
-        .min(usize::try_from(left).unwrap_or(usize::MAX).saturating_add(1));
+    let want = need.max(MIN_READ).min(
+        usize::try_from(left)
+            .unwrap_or(usize::MAX)
+            .saturating_add(1),
+    );
     let n = read_retrying(file, reader.insert(want))?;
     reader.notify_read(n);
     Ok(n)

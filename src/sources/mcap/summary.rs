@@ -40,7 +40,11 @@ pub fn read_mcap_summary(path: &Path) -> Option<mcap::Summary> {
         match event.ok()? {
             SummaryReadEvent::ReadRequest(n) => {
                 // The reader zero-fills what it asks for: never more than the file holds.
-                let n = n.min(usize::try_from(size).unwrap_or(usize::MAX).saturating_add(1));
+                let n = n.min(
+                    usize::try_from(size)
+                        .unwrap_or(usize::MAX)
+                        .saturating_add(1),
+                );
                 let read = file.read(reader.insert(n)).ok()?;
                 reader.notify_read(read);
             }

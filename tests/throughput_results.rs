@@ -1,0 +1,44 @@
+//! The fast offset search (issue "evaluate at the speed of reading") changes how the answer is
+//! computed, not the answer: on every shared mission, `eval` with all defaults gives the applied Δt
+//! within 1 ms and the Drift Error RMSE within 1e-4 of what the direct search gave before it
+//! (the table: trajdrift at f2e5065, `eval MISSION --reference /reference/position --estimate
+//! /estimate/odom --json`, all defaults).
+
+mod common;
+
+use trajdrift::eval::config::{EvalConfig, NamedInput};
+use trajdrift::eval::evaluate;
+
+/// Mission, applied Δt (s), DE RMSE at 5 m, from the direct search.
+const BEFORE: [(&str, f64, f64); 7] = [
+    ("clock_drift", -0.24644699550543664, 0.020112806215276398),
+    ("clock_step", -0.099881422990232, 0.02018004729882896),
+    ("gnss_outages", -0.3485449263776354, 0.020081688444432675),
+    ("legged", 0.08022518275491504, 0.02024263863994685),
+    ("legged_spins", -0.1466197685490537, 0.021348759927737916),
+    ("lever_arm", 0.09963616482666536, 0.02015602921435496),
+    ("straight", 0.2504683853035043, 0.020365379421789877),
+];
+
+#[test]
+fn shared_missions_give_the_direct_searchs_answers() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    for (name, dt, de) in BEFORE {
+        let config = EvalConfig::new(
+            Some(common::mission(&shared, name)),
+            NamedInput::topic("/reference/position"),
+            vec![NamedInput::topic("/estimate/odom")],
+        );
+        let report = evaluate(&config, &|_| {}).unwrap();
+        let e = &report.estimates[0];
+        let (got_dt, got_de) = (e.time_offset.applied_s, e.drift_error[0].rmse.unwrap());
+        println!(
+            "{name:<13} Δt {got_dt:+.6} s (before {dt:+.6}, {:+.4} ms)  DE {got_de:.6} (before {de:.6})",
+            (got_dt - dt) * 1e3
+        );
+        assert!((got_dt - dt).abs() <= 1e-3, "{name}: Δt {got_dt} vs {dt}");
+        assert!((got_de - de).abs() <= 1e-4, "{name}: DE {got_de} vs {de}");
+    }
+}
