@@ -22,10 +22,8 @@
 //! and the method's own bias of a few ms). tests/time_offset_profile.rs `coverage_table` shows the
 //! coverage of 2σ over simulated missions.
 
-use std::sync::Arc;
-
 use crate::align::time_offset::{
-    prepared_signals, search_signals, OffsetMethod, OffsetParams, Pair, Signal,
+    prepared_signals, search_signals, OffsetMethod, OffsetParams, Pair, Signal, SignalPair,
 };
 use crate::error::Result;
 
@@ -109,7 +107,7 @@ pub fn offset_profile(
     params: &OffsetParams,
     offset_s: f64,
     profile: &ProfileParams,
-) -> Result<(OffsetProfile, (Arc<Signal>, Arc<Signal>))> {
+) -> Result<(OffsetProfile, SignalPair)> {
     let (r, e) = prepared_signals(method, pair, params, offset_s)?;
     let p = profile_of_signals(method, (&r, &e), params, offset_s, profile);
     Ok((p, (r, e)))

@@ -205,7 +205,7 @@ pub fn estimate_time_offset_cached(
     method: OffsetMethod,
     pair: &Pair<'_>,
     params: &OffsetParams,
-    (ref_exclude, est_exclude): (&[(f64, f64)], &[(f64, f64)]),
+    (ref_exclude, est_exclude): (Intervals<'_>, Intervals<'_>),
 ) -> Result<OffsetEstimate> {
     check_params(params)?;
     if method == OffsetMethod::Auto {
@@ -261,7 +261,7 @@ pub fn prepared_signals(
     pair: &Pair<'_>,
     params: &OffsetParams,
     offset_s: f64,
-) -> Result<(Arc<Signal>, Arc<Signal>)> {
+) -> Result<SignalPair> {
     check_params(params)?;
     let (r, mut e) = pair.signals(method, params)?;
     if method == OffsetMethod::Speed {
@@ -293,7 +293,7 @@ pub struct Pair<'a> {
 /// reference first.
 #[derive(Default)]
 pub struct SignalCache {
-    curvature: [OnceLock<(Arc<Signal>, Arc<Signal>)>; 2],
+    curvature: [OnceLock<SignalPair>; 2],
     speed: [OnceLock<Arc<Signal>>; 2],
 }
 
@@ -312,11 +312,7 @@ impl<'a> Pair<'a> {
 
     /// The reference's and the estimate's signal for `method` (the curvature parameters, speed
     /// window and gap must be those of every call with this cache).
-    pub fn signals(
-        &self,
-        method: OffsetMethod,
-        params: &OffsetParams,
-    ) -> Result<(Arc<Signal>, Arc<Signal>)> {
+    pub fn signals(&self, method: OffsetMethod, params: &OffsetParams) -> Result<SignalPair> {
         Ok((
             checked(self.one(0, method, params), method, "reference")?,
             checked(self.one(1, method, params), method, "estimate")?,
@@ -503,6 +499,12 @@ const MAX_SPEED_LEVER_M: f64 = 3.0;
 /// Times, values and (speed only; empty otherwise) heading rates of one trajectory's signal for
 /// `method`.
 pub type Signal = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// The reference's and the estimate's signal, shared.
+pub type SignalPair = (Arc<Signal>, Arc<Signal>);
+
+/// Time intervals `[a, b]`, seconds.
+pub type Intervals<'a> = &'a [(f64, f64)];
 
 /// The signal `method` correlates, computed anew ([`Pair`] keeps them for reuse).
 pub fn method_signal(
