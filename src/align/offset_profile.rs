@@ -22,6 +22,8 @@
 //! and the method's own bias of a few ms). tests/time_offset_profile.rs `coverage_table` shows the
 //! coverage of 2σ over simulated missions.
 
+use rayon::prelude::*;
+
 use crate::align::time_offset::{
     prepared_signals, search_signals, OffsetMethod, OffsetParams, Pair, Signal, SignalPair,
 };
@@ -142,7 +144,9 @@ pub fn profile_of_signals(
     };
     let window_s = window_s.min(b - a);
     // Each window's answer, σ still the residual's (NaN when it has none).
+    // The windows are independent: searched in parallel (rayon keeps their order).
     let raw: Vec<ProfileWindow> = (0..n)
+        .into_par_iter()
         .filter_map(|k| {
             let lo = a + k as f64 * step_s;
             one_window(method, (r, e), &shifted, &p, (lo, lo + window_s), offset_s)
