@@ -197,23 +197,61 @@ impl Prefix {
         p
     }
 
-    /// The sums of lag `k` over a run whose points meet D's local indices qa … qa + len − 1.
-    fn add(&self, run: &Run, qa: usize, s: &mut Sums) {
-        let qb = qa + run.len;
-        let a = qa as f64;
-        let m0 = self.m0[qb] - self.m0[qa];
-        let m1 = (self.m1[qb] - self.m1[qa]) - a * m0;
-        let m2 = (self.m2[qb] - self.m2[qa]) - 2.0 * a * (self.m1[qb] - self.m1[qa]) + a * a * m0;
-        let d0 = self.d0[qb] - self.d0[qa];
-        let d1 = (self.d1[qb] - self.d1[qa]) - a * d0;
-        let (c0, c1) = (run.c0, run.c1);
-        s.n += m0;
-        s.d += d0;
-        s.s += c0 * m0 + c1 * m1;
-        s.ds += c0 * d0 + c1 * d1;
-        s.dd += self.dd[qb] - self.dd[qa];
-        s.ss += c0 * c0 * m0 + 2.0 * c0 * c1 * m1 + c1 * c1 * m2;
+    /// Adds to every lag the sums of `run`, whose points meet D's local indices from `base + x` at
+    /// lag slot x (slots in the order of rising index). Slot by slot, each a plain loop over
+    /// contiguous slices, so it vectorises; the arithmetic per slot is that of one run and one lag.
+    fn add_run(&self, run: &Run, base: usize, slots: &[f64], sums: &mut LagSums) {
+        let l = slots.len();
+        let (a0, b0) = (base, base + run.len);
+        let (m0a, m0b) = (&self.m0[a0..a0 + l], &self.m0[b0..b0 + l]);
+        let (m1a, m1b) = (&self.m1[a0..a0 + l], &self.m1[b0..b0 + l]);
+        let (m2a, m2b) = (&self.m2[a0..a0 + l], &self.m2[b0..b0 + l]);
+        let (d0a, d0b) = (&self.d0[a0..a0 + l], &self.d0[b0..b0 + l]);
+        let (d1a, d1b) = (&self.d1[a0..a0 + l], &self.d1[b0..b0 + l]);
+        let (dda, ddb) = (&self.dd[a0..a0 + l], &self.dd[b0..b0 + l]);
+        let (c0, c1, af) = (run.c0, run.c1, a0 as f64);
+        let LagSums {
+            n,
+            d,
+            s,
+            ds,
+            dd,
+            ss,
+        } = sums;
+        let (n, d, s, ds, dd, ss) = (
+            &mut n[..l],
+            &mut d[..l],
+            &mut s[..l],
+            &mut ds[..l],
+            &mut dd[..l],
+            &mut ss[..l],
+        );
+        for x in 0..l {
+            let a = af + slots[x];
+            let m0 = m0b[x] - m0a[x];
+            let m1d = m1b[x] - m1a[x];
+            let m1 = m1d - a * m0;
+            let m2 = (m2b[x] - m2a[x]) - 2.0 * a * m1d + a * a * m0;
+            let d0 = d0b[x] - d0a[x];
+            let d1 = (d1b[x] - d1a[x]) - a * d0;
+            n[x] += m0;
+            d[x] += d0;
+            s[x] += c0 * m0 + c1 * m1;
+            ds[x] += c0 * d0 + c1 * d1;
+            dd[x] += ddb[x] - dda[x];
+            ss[x] += c0 * c0 * m0 + 2.0 * c0 * c1 * m1 + c1 * c1 * m2;
+        }
     }
+}
+
+/// The sums of every lag slot, one vector per sum.
+struct LagSums {
+    n: Vec<f64>,
+    d: Vec<f64>,
+    s: Vec<f64>,
+    ds: Vec<f64>,
+    dd: Vec<f64>,
+    ss: Vec<f64>,
 }
 
 /// The sums of every lag k in `lo..=hi`, each run (S at m) against D at m + σ·k.
@@ -226,7 +264,17 @@ fn sums_against_runs(
     sigma: i64,
 ) -> Vec<Sums> {
     let lags = (hi - lo + 1) as usize;
-    let mut sums = vec![Sums::default(); lags];
+    let zeros = || vec![0.0; lags];
+    let mut sums = LagSums {
+        n: zeros(),
+        d: zeros(),
+        s: zeros(),
+        ds: zeros(),
+        dd: zeros(),
+        ss: zeros(),
+    };
+    // Slot x holds σ·k = kmin + x: D's index rises with the slot whichever way the lags run.
+    let slots: Vec<f64> = (0..lags).map(|x| x as f64).collect();
     let (kmin, kmax) = ((sigma * lo).min(sigma * hi), (sigma * lo).max(sigma * hi));
     let block = BLOCK.max(4 * lags);
     let mut i = 0;
@@ -244,15 +292,25 @@ fn sums_against_runs(
         let dense = resample_finite_on_grid(dt, dv, hf, j0, len, gap);
         let prefix = Prefix::of(&dense);
         for run in &runs[i..end] {
-            for (l, s) in sums.iter_mut().enumerate() {
-                let k = sigma * (lo + l as i64);
-                let qa = (run.m0 + k - j0) as usize;
-                prefix.add(run, qa, s);
-            }
+            prefix.add_run(run, (run.m0 + kmin - j0) as usize, &slots, &mut sums);
         }
         i = end;
     }
-    sums
+    // Slot x is lag lo + x when σ = 1 and lag hi − x when σ = −1.
+    let mut out: Vec<Sums> = (0..lags)
+        .map(|x| Sums {
+            n: sums.n[x],
+            d: sums.d[x],
+            s: sums.s[x],
+            ds: sums.ds[x],
+            dd: sums.dd[x],
+            ss: sums.ss[x],
+        })
+        .collect();
+    if sigma < 0 {
+        out.reverse();
+    }
+    out
 }
 
 #[cfg(test)]
