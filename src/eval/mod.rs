@@ -15,7 +15,9 @@ use rayon::prelude::*;
 use crate::align::auto_offset::auto_time_offset_of;
 use crate::align::auto_params::auto_params;
 use crate::align::clock_model::{clock_model_of, ClockModel, OffsetModel};
-use crate::align::time_offset::{OffsetEstimate, OffsetMethod, OffsetStatus, Pair, SignalCache};
+use crate::align::time_offset::{
+    estimate_time_offset_cached, OffsetEstimate, OffsetMethod, OffsetStatus, Pair, SignalCache,
+};
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult};
 use crate::report::json::{
@@ -254,38 +256,45 @@ fn evaluate_estimate(
             let cache = SignalCache::default();
             let pair = Pair::new((&ref_t, ref_p), (&est_t, est_p), &cache);
             let params = config.offset_params();
-            let auto = match auto_time_offset_of(&pair, &params) {
-                Ok(a) => a,
-                Err(e @ Error::NoOverlap { .. }) => return Err(clone_no_overlap(&e, &est.label)),
-                Err(e) => return Err(relabel(e, &est.label)),
-            };
-            let methods = auto
-                .runs
-                .iter()
-                .map(|(m, r)| method_report(*m, r))
-                .collect();
-            // The answer of the requested method (`auto`: the combined one) and why.
-            let (chosen, reason, implied_lever) = if config.offset_method == OffsetMethod::Auto {
-                warnings.extend(auto.warnings.iter().map(|w| Warning {
-                    code: w.code.clone(),
-                    message: format!("{}: {}", est.name, w.message),
-                }));
-                (
-                    Some(Ok(auto.estimate)),
-                    auto.decision.reason.clone(),
-                    auto.decision.implied_lever_arm_m,
-                )
+            // `auto` runs every method; a named method runs alone (only what it needs is computed).
+            let auto = if config.offset_method == OffsetMethod::Auto {
+                Some(match auto_time_offset_of(&pair, &params) {
+                    Ok(a) => a,
+                    Err(e @ Error::NoOverlap { .. }) => {
+                        return Err(clone_no_overlap(&e, &est.label))
+                    }
+                    Err(e) => return Err(relabel(e, &est.label)),
+                })
             } else {
-                let r = auto
-                    .runs
-                    .iter()
-                    .find(|(m, _)| *m == config.offset_method)
-                    .map(|(_, r)| r.as_ref().map(|o| *o));
-                (
-                    r,
+                None
+            };
+            let single: Vec<(OffsetMethod, Result<OffsetEstimate>)> = match auto {
+                Some(_) => Vec::new(),
+                None => vec![(
+                    config.offset_method,
+                    estimate_time_offset_cached(config.offset_method, &pair, &params, (&[], &[])),
+                )],
+            };
+            let runs = auto.as_ref().map_or(&single, |a| &a.runs);
+            let methods = runs.iter().map(|(m, r)| method_report(*m, r)).collect();
+            // The answer of the requested method (`auto`: the combined one) and why.
+            let (chosen, reason, implied_lever) = match &auto {
+                Some(auto) => {
+                    warnings.extend(auto.warnings.iter().map(|w| Warning {
+                        code: w.code.clone(),
+                        message: format!("{}: {}", est.name, w.message),
+                    }));
+                    (
+                        Some(Ok(auto.estimate)),
+                        auto.decision.reason.clone(),
+                        auto.decision.implied_lever_arm_m,
+                    )
+                }
+                None => (
+                    single.first().map(|(_, r)| r.as_ref().map(|o| *o)),
                     format!("--offset-method {}", config.offset_method.as_str()),
                     None,
-                )
+                ),
             };
             match chosen {
                 Some(Ok(o)) if o.status == OffsetStatus::Ok => {
