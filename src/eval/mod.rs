@@ -380,13 +380,6 @@ fn evaluate_estimate(
         });
     }
     let t0_s = t0_ns as f64 * 1e-9;
-    let standard_metrics = config.metrics.any_standard().then(|| {
-        crate::metrics::standard::in_eval::standard_metrics(
-            &reference.trajectory,
-            &aligned,
-            &config.metrics,
-        )
-    });
     let params = config.drift_params(config.windows_m[0]);
     let drift = if config.metrics.de {
         drift_error_windows(
@@ -404,12 +397,21 @@ fn evaluate_estimate(
     } else {
         Vec::new()
     };
+    drop(aligned_t);
     if let Some(file) = &config.export_aligned {
         export::write_aligned(
             &export::aligned_path(file, &est.name, n_estimates),
             &aligned,
         )?;
     }
+    // Last: the metrics take the aligned estimate whole (no copy of it).
+    let standard_metrics = config.metrics.any_standard().then(|| {
+        crate::metrics::standard::in_eval::standard_metrics(
+            &reference.trajectory,
+            aligned,
+            &config.metrics,
+        )
+    });
     Ok((
         EstimateReport {
             name: est.name.clone(),

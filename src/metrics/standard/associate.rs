@@ -188,6 +188,46 @@ pub fn associate(
     })
 }
 
+/// [`associate`] with the estimate borrowed: when it is the longer side (a 200 Hz odometry against a
+/// 10 Hz reference), only its poses picked or interpolated for a pair are copied; otherwise it is the
+/// side whose poses are kept, and it is copied whole as [`associate`] would keep it.
+pub fn associate_borrowed(
+    reference: Poses,
+    estimate: &Poses,
+    max_diff: f64,
+    offset_s: f64,
+    method: SyncMethod,
+) -> Result<(Poses, Poses)> {
+    if estimate.len() <= reference.len() {
+        return associate(reference, estimate.clone(), max_diff, offset_s, method);
+    }
+    let (Some(tr), Some(te)) = (&reference.stamps_s, &estimate.stamps_s) else {
+        return Err(Error::InvalidArgument(
+            "association needs stamped trajectories on both sides".into(),
+        ));
+    };
+    let (is, il) = match_ids(tr, te, max_diff, offset_s);
+    if is.is_empty() {
+        return Err(no_pairs(tr, te, max_diff, offset_s));
+    }
+    let short = match is {
+        Ids::All(n) if n == reference.len() => reference,
+        other => reference.select(&other.into_vec()),
+    };
+    let long = match method {
+        SyncMethod::NearestTime => estimate.select_copy(&il),
+        SyncMethod::Interpolation => {
+            let at: Vec<f64> = short
+                .stamps_s
+                .as_ref()
+                .map(|s| s.iter().map(|t| t - offset_s).collect())
+                .unwrap_or_default();
+            interpolate(estimate, &at)
+        }
+    };
+    Ok((short, long))
+}
+
 /// The "0 pairs" error, with how far apart the clocks look (start to start) and what to try.
 fn no_pairs(tr: &[f64], te: &[f64], max_diff: f64, offset_s: f64) -> Error {
     let gap = match (tr.first(), te.first()) {

@@ -9,8 +9,8 @@ use serde::{Deserialize, Serialize};
 
 use super::kitti_drift::{kitti_drift, KittiDrift};
 use super::{
-    evaluate, Alignment, DeltaUnit, Metric, MetricResult, PairSelection, Pipeline, PoseRelation,
-    Poses, StampSeconds,
+    evaluate_borrowed, Alignment, DeltaUnit, Metric, MetricResult, PairSelection, Pipeline,
+    PoseRelation, Poses, StampSeconds,
 };
 use crate::trajectory::Trajectory;
 
@@ -89,10 +89,11 @@ pub struct StandardMetrics {
 /// `reference`. Sensors of one robot are not sampled in phase, so the association differs from evo's
 /// default in one way: the longer trajectory is interpolated at the matched stamps
 /// (`--sync_method interpolation`) and `t_max_diff` is the sparser trajectory's median sample period
-/// (at least evo's 0.01 s).
+/// (at least evo's 0.01 s). The estimate is taken whole and held once: each metric copies only the
+/// poses paired with the reference.
 pub fn standard_metrics(
     reference: &Trajectory,
-    estimate: &Trajectory,
+    estimate: Trajectory,
     set: &MetricSet,
 ) -> StandardMetrics {
     let conv = Some(StampSeconds::Decimal);
@@ -101,17 +102,18 @@ pub fn standard_metrics(
         alignment: Alignment::Se3,
         sync: super::SyncMethod::Interpolation,
         t_max_diff_s: median_period_s(reference)
-            .max(median_period_s(estimate))
+            .max(median_period_s(&estimate))
             .max(0.01),
         ..Pipeline::default()
     };
+    let oriented = reference.orientations.is_some() && estimate.orientations.is_some();
+    let estimate = Poses::from_trajectory(estimate, conv);
     let rpe_1m = Metric::Rpe(PairSelection {
         delta: 1.0,
         unit: DeltaUnit::Meters,
         ..PairSelection::default()
     });
     let mut out = StandardMetrics::default();
-    let oriented = reference.orientations.is_some() && estimate.orientations.is_some();
     let mut run = |name: &str, metric: Metric, relation: PoseRelation| {
         // Without orientations an answer that needs them is known before copying millions of poses.
         let result = if !oriented && super::needs_orientation(metric, relation, aligned.alignment) {
@@ -120,13 +122,7 @@ pub fn standard_metrics(
                 relation.as_str()
             )))
         } else {
-            evaluate(
-                poses(reference),
-                poses(estimate),
-                metric,
-                relation,
-                &aligned,
-            )
+            evaluate_borrowed(poses(reference), &estimate, metric, relation, &aligned)
         };
         match result {
             Ok(r) => Some(r),
@@ -145,9 +141,9 @@ pub fn standard_metrics(
             run("rpe_point_distance_1m", rpe_1m, PoseRelation::PointDistance);
     }
     if set.kitti {
-        let pair = super::associate::associate(
+        let pair = super::associate::associate_borrowed(
             poses(reference),
-            poses(estimate),
+            &estimate,
             aligned.t_max_diff_s,
             0.0,
             aligned.sync,

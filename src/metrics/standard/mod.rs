@@ -203,6 +203,56 @@ pub fn evaluate(
     relation: PoseRelation,
     pipeline: &Pipeline,
 ) -> Result<MetricResult> {
+    let needs_rot = check_rotations(&reference, &estimate, metric, relation)?;
+    if !needs_rot && pipeline.alignment != Alignment::Origin {
+        // Not read: free them before association (half the memory at millions of poses).
+        reference.rotations = None;
+        estimate.rotations = None;
+    }
+    let (reference, estimate) = pair_up(reference, estimate, pipeline)?;
+    evaluate_paired(reference, estimate, metric, relation, pipeline)
+}
+
+/// [`evaluate`] with the estimate borrowed: only its poses paired with the reference are copied (an
+/// evaluation that already holds a 200 Hz estimate does not need a second copy of it per metric).
+pub fn evaluate_borrowed(
+    mut reference: Poses,
+    estimate: &Poses,
+    metric: Metric,
+    relation: PoseRelation,
+    pipeline: &Pipeline,
+) -> Result<MetricResult> {
+    let needs_rot = check_rotations(&reference, estimate, metric, relation)?;
+    let unread = !needs_rot && pipeline.alignment != Alignment::Origin;
+    if unread {
+        reference.rotations = None;
+    }
+    let (reference, mut estimate) = if reference.stamps_s.is_some() && estimate.stamps_s.is_some() {
+        let reference = reference.crop(pipeline.t_start_s, pipeline.t_end_s);
+        associate::associate_borrowed(
+            reference,
+            estimate,
+            pipeline.t_max_diff_s,
+            pipeline.t_offset_s,
+            pipeline.sync,
+        )?
+    } else {
+        pair_up(reference, estimate.clone(), pipeline)?
+    };
+    if unread {
+        estimate.rotations = None;
+    }
+    evaluate_paired(reference, estimate, metric, relation, pipeline)
+}
+
+/// Whether `metric` with `relation` reads rotations; the one-line error when it does and a side has
+/// none.
+fn check_rotations(
+    reference: &Poses,
+    estimate: &Poses,
+    metric: Metric,
+    relation: PoseRelation,
+) -> Result<bool> {
     let point_relation = matches!(
         relation,
         PoseRelation::PointDistance | PoseRelation::PointDistanceErrorRatio
@@ -221,12 +271,17 @@ pub fn evaluate(
     if needs_rot && (reference.rotations.is_none() || estimate.rotations.is_none()) {
         return Err(rpe::needs_orientation(&what));
     }
-    if !needs_rot && pipeline.alignment != Alignment::Origin {
-        // Not read: free them before association (half the memory at millions of poses).
-        reference.rotations = None;
-        estimate.rotations = None;
-    }
-    let (reference, mut estimate) = pair_up(reference, estimate, pipeline)?;
+    Ok(needs_rot)
+}
+
+/// Alignment, errors and statistics of poses already paired.
+fn evaluate_paired(
+    reference: Poses,
+    mut estimate: Poses,
+    metric: Metric,
+    relation: PoseRelation,
+    pipeline: &Pipeline,
+) -> Result<MetricResult> {
     let alignment = align(&reference, &mut estimate, pipeline)?;
     let (reference, estimate) = match pipeline.project_to_plane {
         Some(p) => (project(&reference, p), project(&estimate, p)),

@@ -159,6 +159,16 @@ impl Poses {
         }
     }
 
+    /// Copies of the poses at `ids`, in that order (the source stays whole).
+    pub fn select_copy(&self, ids: &[u32]) -> Poses {
+        let pick = |v: &[f64]| ids.iter().map(|&i| v[i as usize]).collect();
+        Poses {
+            stamps_s: self.stamps_s.as_deref().map(pick),
+            positions: ids.iter().map(|&i| self.positions[i as usize]).collect(),
+            rotations: self.rotations.clone().map(|r| r.select(ids)),
+        }
+    }
+
     /// Keeps the poses stamped in `[start, end]` (either bound optional), like evo's
     /// `reduce_to_time_range`.
     pub fn crop(self, start: Option<f64>, end: Option<f64>) -> Poses {
