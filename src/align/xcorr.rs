@@ -11,8 +11,8 @@
 //! instead of O(N·K). [`masked_ncc_direct`] is the O(N·K) definition, used for short lag windows and
 //! to test the FFT path.
 
+use realfft::RealFftPlanner;
 use rustfft::num_complex::Complex;
-use rustfft::FftPlanner;
 
 /// Whether the NCC subtracts each signal's mean over the overlap first.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -123,82 +123,67 @@ pub fn masked_ncc(
     // product wraps around onto a non-zero sample); lags beyond (−na, nb) have no overlap anyway.
     let k_abs = lag_min.unsigned_abs().max(lag_max.unsigned_abs()) as usize;
     let len = (na.max(nb) + k_abs.min(na.max(nb))).next_power_of_two();
-    let mut planner = FftPlanner::<f64>::new();
+    // Real-input FFTs (`realfft`): a spectrum is len/2 + 1 bins, half a complex transform's.
+    let mut planner = RealFftPlanner::<f64>::new();
     let fwd = planner.plan_fft_forward(len);
     let inv = planner.plan_fft_inverse(len);
-    // Two real sequences per complex FFT (x in the real part, y in the imaginary part) halves the
-    // transforms; they are separated again in the frequency domain, in place (bins f and len − f
-    // together), so a pair costs two buffers.
-    let spectrum_pair = |x: &dyn Fn(usize) -> f64, y: &dyn Fn(usize) -> f64, n: usize| {
-        let mut fx = vec![Complex::new(0.0, 0.0); len];
-        for (j, c) in fx.iter_mut().enumerate().take(n) {
-            *c = Complex::new(x(j), y(j));
+    let spectrum = |x: &dyn Fn(usize) -> f64, n: usize| -> Vec<Complex<f64>> {
+        let mut input = fwd.make_input_vec();
+        for (j, v) in input.iter_mut().enumerate().take(n) {
+            *v = x(j);
         }
-        fwd.process(&mut fx);
-        let mut fy = vec![Complex::new(0.0, 0.0); len];
-        for f in 0..=len / 2 {
-            let g = (len - f) % len;
-            let (z, w) = (fx[f], fx[g]);
-            fx[f] = (z + w.conj()) * 0.5;
-            fy[f] = (z - w.conj()) * Complex::new(0.0, -0.5);
-            fx[g] = (w + z.conj()) * 0.5;
-            fy[g] = (w - z.conj()) * Complex::new(0.0, -0.5);
-        }
-        (fx, fy)
+        let mut out = fwd.make_output_vec();
+        // Lengths come from the planner's own buffers: the transform cannot fail.
+        fwd.process(&mut input, &mut out)
+            .expect("realfft buffers of the planned length");
+        out
     };
     let ma = |j: usize| if mask_a[j] > 0.5 { 1.0 } else { 0.0 };
     let mb = |j: usize| if mask_b[j] > 0.5 { 1.0 } else { 0.0 };
     let av = |j: usize| if mask_a[j] > 0.5 { a[j] } else { 0.0 };
     let bv = |j: usize| if mask_b[j] > 0.5 { b[j] } else { 0.0 };
-    // Correlation c[k] = Σ_j x[j]·y[j+k] = IFFT(conj(X)·Y)[k mod len]. Two correlations share one
-    // inverse FFT: both are real, so c1 + i·c2 comes back in the real and imaginary parts. Only the
-    // searched lags are kept, and each spectrum is dropped once no correlation needs it (a coarse
-    // search of a 2-hour mission holds four of eight megabytes each, not nine).
-    let at_lags = |mut buf: Vec<Complex<f64>>| -> Vec<Complex<f64>> {
-        inv.process(&mut buf);
+    // Correlation c[k] = Σ_j x[j]·y[j+k] = IFFT(conj(X)·Y)[k mod len], real. Only the searched lags
+    // are kept, and each spectrum is dropped once no correlation needs it (a coarse search of a
+    // 2-hour mission holds four spectra of four megabytes each).
+    let corr = |x: &[Complex<f64>], y: &[Complex<f64>]| -> Vec<f64> {
+        let mut prod: Vec<Complex<f64>> = x.iter().zip(y).map(|(x, y)| x.conj() * y).collect();
+        // Real signals: the DC and Nyquist bins are real (their rounding residue is dropped).
+        let last = prod.len() - 1;
+        prod[0].im = 0.0;
+        prod[last].im = 0.0;
+        let mut out = inv.make_output_vec();
+        inv.process(&mut prod, &mut out)
+            .expect("realfft buffers of the planned length");
         let scale = 1.0 / len as f64;
         (0..lags)
-            .map(|i| buf[(lag_min + i as i64).rem_euclid(len as i64) as usize] * scale)
+            .map(|i| out[(lag_min + i as i64).rem_euclid(len as i64) as usize] * scale)
             .collect()
     };
-    let corr_pair =
-        |x1: &[Complex<f64>], y1: &[Complex<f64>], x2: &[Complex<f64>], y2: &[Complex<f64>]| {
-            at_lags(
-                (0..len)
-                    .map(|f| x1[f].conj() * y1[f] + Complex::new(0.0, 1.0) * (x2[f].conj() * y2[f]))
-                    .collect(),
-            )
-        };
-    let (f_a, f_ma) = spectrum_pair(&av, &ma, na);
-    let (f_b, f_mb) = spectrum_pair(&bv, &mb, nb);
-    let ab_n = corr_pair(&f_a, &f_b, &f_ma, &f_mb);
+    let (f_a, f_ma) = (spectrum(&av, na), spectrum(&ma, na));
+    let (f_b, f_mb) = (spectrum(&bv, nb), spectrum(&mb, nb));
+    let sab = corr(&f_a, &f_b);
+    let count = corr(&f_ma, &f_mb);
     let sa_sb = match centering {
-        Centering::MeanRemoved => Some(corr_pair(&f_a, &f_mb, &f_ma, &f_b)),
+        Centering::MeanRemoved => Some((corr(&f_a, &f_mb), corr(&f_ma, &f_b))),
         Centering::Raw => None,
     };
     drop((f_a, f_b));
-    let squares =
-        |j: usize, n: usize, v: &dyn Fn(usize) -> f64| if j < n { v(j) * v(j) } else { 0.0 };
-    let (f_aa, f_bb) = spectrum_pair(
-        &|j| squares(j, na, &av),
-        &|j| squares(j, nb, &bv),
-        na.max(nb),
-    );
-    let aa_bb = corr_pair(&f_aa, &f_mb, &f_ma, &f_bb);
+    let saa = corr(&spectrum(&|j| av(j) * av(j), na), &f_mb);
+    let sbb = corr(&f_ma, &spectrum(&|j| bv(j) * bv(j), nb));
     for i in 0..lags {
         let k = lag_min + i as i64;
         if k <= -(na as i64) || k >= nb as i64 {
             continue;
         }
-        let n = ab_n[i].im.round().max(0.0);
-        let (sa, sb) = sa_sb.as_ref().map_or((0.0, 0.0), |s| (s[i].re, s[i].im));
+        let n = count[i].round().max(0.0);
+        let (sa, sb) = sa_sb.as_ref().map_or((0.0, 0.0), |(a, b)| (a[i], b[i]));
         let sums = OverlapSums {
             n,
             sa,
             sb,
-            sab: ab_n[i].re,
-            saa: aa_bb[i].re.max(0.0),
-            sbb: aa_bb[i].im.max(0.0),
+            sab: sab[i],
+            saa: saa[i].max(0.0),
+            sbb: sbb[i].max(0.0),
         };
         out.overlap[i] = n as usize;
         out.ncc[i] = sums.ncc(centering);
