@@ -38,9 +38,12 @@ pub fn offset_sigma(
     max_gap_s: f64,
     centering: Centering,
 ) -> Option<f64> {
-    let shifted: Vec<f64> = est_t.iter().map(|t| t + offset_s).collect();
     let x = resample(ref_t, ref_v, step, max_gap_s);
-    let y = resample(&shifted, est_v, step, max_gap_s);
+    let y = {
+        // Dropped once resampled (a second copy of the estimate's times).
+        let shifted: Vec<f64> = est_t.iter().map(|t| t + offset_s).collect();
+        resample(&shifted, est_v, step, max_gap_s)
+    };
     let lo = x.first_index.max(y.first_index);
     let hi = (x.first_index + x.len() as i64).min(y.first_index + y.len() as i64);
     let defined = |s: &crate::align::grid::RegularSignal, n: i64| {
