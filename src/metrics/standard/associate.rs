@@ -166,20 +166,10 @@ pub fn associate(
     } else {
         (estimate, reference)
     };
-    let short = match is {
-        Ids::All(n) if n == short.len() => short,
-        other => short.select(&other.into_vec()),
-    };
+    let short = kept(short, is);
     let long = match method {
         SyncMethod::NearestTime => long.select(&il),
-        SyncMethod::Interpolation => {
-            let at: Vec<f64> = short
-                .stamps_s
-                .as_ref()
-                .map(|s| s.iter().map(|t| t - off).collect())
-                .unwrap_or_default();
-            interpolate(&long, &at)
-        }
+        SyncMethod::Interpolation => interpolate(&long, &stamps_less(&short, off)),
     };
     Ok(if est_longer {
         (short, long)
@@ -210,22 +200,28 @@ pub fn associate_borrowed(
     if is.is_empty() {
         return Err(no_pairs(tr, te, max_diff, offset_s));
     }
-    let short = match is {
-        Ids::All(n) if n == reference.len() => reference,
-        other => reference.select(&other.into_vec()),
-    };
+    let short = kept(reference, is);
     let long = match method {
         SyncMethod::NearestTime => estimate.select_copy(&il),
-        SyncMethod::Interpolation => {
-            let at: Vec<f64> = short
-                .stamps_s
-                .as_ref()
-                .map(|s| s.iter().map(|t| t - offset_s).collect())
-                .unwrap_or_default();
-            interpolate(estimate, &at)
-        }
+        SyncMethod::Interpolation => interpolate(estimate, &stamps_less(&short, offset_s)),
     };
     Ok((short, long))
+}
+
+/// The poses of the shorter side that found a pair.
+fn kept(short: Poses, ids: Ids) -> Poses {
+    match ids {
+        Ids::All(n) if n == short.len() => short,
+        other => short.select(&other.into_vec()),
+    }
+}
+
+/// The stamps of `p` less `off`: where the longer side is interpolated.
+fn stamps_less(p: &Poses, off: f64) -> Vec<f64> {
+    p.stamps_s
+        .as_ref()
+        .map(|s| s.iter().map(|t| t - off).collect())
+        .unwrap_or_default()
 }
 
 /// The "0 pairs" error, with how far apart the clocks look (start to start) and what to try.
