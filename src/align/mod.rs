@@ -8,6 +8,7 @@ pub mod fine_sums;
 pub mod grid;
 pub mod offset_profile;
 pub mod offset_sigma;
+pub mod signals;
 pub mod speed;
 pub mod still;
 pub mod time_offset;

@@ -1,0 +1,199 @@
+//! The signals the offset search correlates, one per trajectory and method: the curvature signature
+//! of eq. (1), unsigned and signed ([`crate::align::curvature`]), and the windowed speed with its
+//! heading rate ([`crate::align::speed`]). [`Pair`] computes each at most once per evaluation and
+//! shares it between the methods, the `auto` re-run without stands and the offset profile: on a
+//! 2-hour 200 Hz mission a signal is tens of megabytes and a signature a third of a second.
+
+use std::sync::{Arc, OnceLock};
+
+use nalgebra::Vector3;
+
+use crate::align::curvature::{curvature_signature, curvature_signature_each};
+use crate::align::speed::speed_profile_each;
+use crate::align::time_offset::{OffsetMethod, OffsetParams};
+use crate::error::{Error, Result};
+
+/// Times, values and (speed only; empty otherwise) heading rates of one trajectory's signal for
+/// `method`.
+pub type Signal = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// The reference's and the estimate's signal, shared.
+pub type SignalPair = (Arc<Signal>, Arc<Signal>);
+
+/// Time intervals `[a, b]`, seconds.
+pub type Intervals<'a> = &'a [(f64, f64)];
+
+/// The signal `method` correlates, computed anew ([`Pair`] keeps them for reuse).
+pub fn method_signal(
+    method: OffsetMethod,
+    t: &[f64],
+    p: &[Vector3<f64>],
+    params: &OffsetParams,
+    what: &str,
+) -> Result<Signal> {
+    let s = match method {
+        OffsetMethod::Speed => speed_signal(t, p, params),
+        _ => {
+            let signed = method != OffsetMethod::Curvature;
+            let mut s: Signal = (Vec::new(), Vec::new(), Vec::new());
+            for c in curvature_signature(t, p, &params.curvature) {
+                s.0.push(c.t);
+                s.1.push(if signed {
+                    c.signed_curvature()
+                } else {
+                    c.curvature
+                });
+            }
+            s
+        }
+    };
+    checked(Box::new(s), method, what).map(|s| *s)
+}
+
+/// The windowed speed and heading rate of one trajectory (see [`crate::align::speed`]).
+pub(crate) fn speed_signal(t: &[f64], p: &[Vector3<f64>], params: &OffsetParams) -> Signal {
+    let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
+    let noise = isotropic_noise(t, p).unwrap_or(0.0);
+    // At most one value a sample: reserved once (no doubling, no slack).
+    let n = t.len();
+    let mut s: Signal = (
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+    );
+    speed_profile_each(t, p, params.speed_window_s, gap, noise, |v| {
+        s.0.push(v.t);
+        s.1.push(v.speed);
+        s.2.push(v.yaw_rate);
+    });
+    s.0.shrink_to_fit();
+    s.1.shrink_to_fit();
+    s.2.shrink_to_fit();
+    s
+}
+
+/// The two trajectories of one evaluation (times from a common origin, the estimate's on its own
+/// clock) and their signals, each computed at most once: by the first method that needs it, then
+/// shared with the other methods, the `auto` re-run without stands and the offset profile.
+pub struct Pair<'a> {
+    pub reference: (&'a [f64], &'a [Vector3<f64>]),
+    pub estimate: (&'a [f64], &'a [Vector3<f64>]),
+    cache: &'a SignalCache,
+}
+
+/// The signals of a [`Pair`] once computed (unsigned and signed curvature come from one signature),
+/// reference first.
+#[derive(Default)]
+pub struct SignalCache {
+    curvature: [OnceLock<SignalPair>; 2],
+    speed: [OnceLock<Arc<Signal>>; 2],
+}
+
+impl<'a> Pair<'a> {
+    pub fn new(
+        reference: (&'a [f64], &'a [Vector3<f64>]),
+        estimate: (&'a [f64], &'a [Vector3<f64>]),
+        cache: &'a SignalCache,
+    ) -> Pair<'a> {
+        Pair {
+            reference,
+            estimate,
+            cache,
+        }
+    }
+
+    /// The reference's and the estimate's signal for `method` (the curvature parameters, speed
+    /// window and gap must be those of every call with this cache).
+    pub fn signals(&self, method: OffsetMethod, params: &OffsetParams) -> Result<SignalPair> {
+        Ok((
+            checked(self.one(0, method, params), method, "reference")?,
+            checked(self.one(1, method, params), method, "estimate")?,
+        ))
+    }
+
+    fn one(&self, k: usize, method: OffsetMethod, params: &OffsetParams) -> Arc<Signal> {
+        let (t, p) = if k == 0 {
+            self.reference
+        } else {
+            self.estimate
+        };
+        if method == OffsetMethod::Speed {
+            return self.cache.speed[k]
+                .get_or_init(|| Arc::new(speed_signal(t, p, params)))
+                .clone();
+        }
+        let (unsigned, signed) = self.cache.curvature[k].get_or_init(|| {
+            // At most one value a sample: reserved once (no doubling, no slack).
+            let n = t.len();
+            let (mut tu, mut u, mut sv) = (
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+            );
+            curvature_signature_each(t, p, &params.curvature, |c| {
+                tu.push(c.t);
+                u.push(c.curvature);
+                sv.push(c.signed_curvature());
+            });
+            let ts = tu.clone();
+            tu.shrink_to_fit();
+            u.shrink_to_fit();
+            sv.shrink_to_fit();
+            (
+                Arc::new((tu, u, Vec::new())),
+                Arc::new((ts, sv, Vec::new())),
+            )
+        });
+        if method == OffsetMethod::Curvature {
+            unsigned.clone()
+        } else {
+            signed.clone()
+        }
+    }
+}
+
+/// `s` when it holds at least 3 samples.
+fn checked<S: std::ops::Deref<Target = Signal>>(
+    s: S,
+    method: OffsetMethod,
+    what: &str,
+) -> Result<S> {
+    if s.0.len() < 3 {
+        return Err(Error::TooFewSamples {
+            what: format!("{what} {} signal", method.as_str()),
+            n: s.0.len(),
+            need: 3,
+        });
+    }
+    Ok(s)
+}
+
+/// σ of white position noise per coordinate from the norms of the third differences of evenly spaced
+/// samples (|Δ³p| of isotropic noise is σ·√20 times a χ with 3 degrees of freedom, median 1.538):
+/// unlike a per-axis estimate it is the same in every rotated frame, so the speed signal and its
+/// heading rate are too.
+fn isotropic_noise(t: &[f64], p: &[Vector3<f64>]) -> Option<f64> {
+    let n = t.len().min(p.len());
+    if n < 40 {
+        return None;
+    }
+    let mut steps: Vec<f64> = t[..n].windows(2).map(|w| w[1] - w[0]).collect();
+    // The median by selection (the element a full sort puts there, in linear time).
+    let mid = steps.len() / 2;
+    let typical = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+    drop(steps);
+    if typical.is_nan() || typical <= 0.0 {
+        return None;
+    }
+    let even = |dt: f64| (dt - typical).abs() <= 0.2 * typical;
+    let mut d3: Vec<f64> = (3..n)
+        .filter(|&i| (i - 2..=i).all(|k| even(t[k] - t[k - 1])))
+        .map(|i| (p[i] - 3.0 * p[i - 1] + 3.0 * p[i - 2] - p[i - 3]).norm())
+        .filter(|v| v.is_finite())
+        .collect();
+    if d3.len() < 30 {
+        return None;
+    }
+    let mid = d3.len() / 2;
+    Some(*d3.select_nth_unstable_by(mid, f64::total_cmp).1 / (20f64.sqrt() * 1.538))
+}
