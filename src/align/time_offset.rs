@@ -8,9 +8,11 @@
 //! t_est + Δt on the reference clock.
 //!
 //! To keep buffers small on long missions the search runs in two stages: the whole ±max_offset on a
-//! coarse grid with FFTs ([`crate::align::xcorr::masked_ncc`]), then the fine step (1 ms) by direct
-//! summation in a window of ±2 coarse steps around the coarse peak, streamed in blocks, and finally a
-//! parabola through the best fine lag and its neighbours for a sub-step offset.
+//! coarse grid with FFTs ([`crate::align::xcorr::masked_ncc`]), then every fine step (1 ms) in a window
+//! of ±2 coarse steps around the coarse peak, with the sums of the fine grid formed from prefix sums
+//! over runs of the sparser signal ([`crate::align::fine_sums`]: no full-length signal on the fine
+//! grid), and finally a parabola through the best fine lag and its neighbours for a sub-step offset.
+//! The signals themselves come from [`crate::align::signals`], computed once per evaluation.
 //!
 //! Confidence (all on the coarse curve, which covers the whole search range). Let ρ be the peak NCC,
 //! b the median NCC over the eligible lags (the level of an unrelated alignment) and P = ρ − b the
