@@ -1,7 +1,7 @@
 //! The offset profile: Δt(t) over sliding windows of the mission, each with an honest σ.
 //!
 //! The signal of the applied method (speed or signed curvature) is computed once per trajectory
-//! ([`crate::align::time_offset::method_signal`]); each window then correlates a slice of the two
+//! ([`crate::align::signals::Pair`]); each window then correlates a slice of the two
 //! signals — the reference's cut to the window, the estimate's (already shifted by the whole
 //! mission's Δt₀) reaching [`SEARCH_S`] past it on both sides — over ±[`SEARCH_S`] around Δt₀. No
 //! re-run of the whole pipeline per window.

@@ -8,7 +8,7 @@ use std::sync::{Arc, OnceLock};
 
 use nalgebra::Vector3;
 
-use crate::align::curvature::{curvature_signature, curvature_signature_each};
+use crate::align::curvature::curvature_signature_each;
 use crate::align::speed::speed_profile_each;
 use crate::align::time_offset::{OffsetMethod, OffsetParams};
 use crate::error::{Error, Result};
@@ -23,35 +23,8 @@ pub type SignalPair = (Arc<Signal>, Arc<Signal>);
 /// Time intervals `[a, b]`, seconds.
 pub type Intervals<'a> = &'a [(f64, f64)];
 
-/// The signal `method` correlates, computed anew ([`Pair`] keeps them for reuse).
-pub fn method_signal(
-    method: OffsetMethod,
-    t: &[f64],
-    p: &[Vector3<f64>],
-    params: &OffsetParams,
-    what: &str,
-) -> Result<Signal> {
-    let s = match method {
-        OffsetMethod::Speed => speed_signal(t, p, params),
-        _ => {
-            let signed = method != OffsetMethod::Curvature;
-            let mut s: Signal = (Vec::new(), Vec::new(), Vec::new());
-            for c in curvature_signature(t, p, &params.curvature) {
-                s.0.push(c.t);
-                s.1.push(if signed {
-                    c.signed_curvature()
-                } else {
-                    c.curvature
-                });
-            }
-            s
-        }
-    };
-    checked(Box::new(s), method, what).map(|s| *s)
-}
-
 /// The windowed speed and heading rate of one trajectory (see [`crate::align::speed`]).
-pub(crate) fn speed_signal(t: &[f64], p: &[Vector3<f64>], params: &OffsetParams) -> Signal {
+fn speed_signal(t: &[f64], p: &[Vector3<f64>], params: &OffsetParams) -> Signal {
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
     let noise = isotropic_noise(t, p).unwrap_or(0.0);
     // At most one value a sample: reserved once (no doubling, no slack).
@@ -105,10 +78,10 @@ impl<'a> Pair<'a> {
     /// The reference's and the estimate's signal for `method` (the curvature parameters, speed
     /// window and gap must be those of every call with this cache).
     pub fn signals(&self, method: OffsetMethod, params: &OffsetParams) -> Result<SignalPair> {
-        Ok((
-            checked(self.one(0, method, params), method, "reference")?,
-            checked(self.one(1, method, params), method, "estimate")?,
-        ))
+        let (r, e) = (self.one(0, method, params), self.one(1, method, params));
+        checked(&r, method, "reference")?;
+        checked(&e, method, "estimate")?;
+        Ok((r, e))
     }
 
     fn one(&self, k: usize, method: OffsetMethod, params: &OffsetParams) -> Arc<Signal> {
@@ -153,11 +126,7 @@ impl<'a> Pair<'a> {
 }
 
 /// `s` when it holds at least 3 samples.
-fn checked<S: std::ops::Deref<Target = Signal>>(
-    s: S,
-    method: OffsetMethod,
-    what: &str,
-) -> Result<S> {
+fn checked(s: &Signal, method: OffsetMethod, what: &str) -> Result<()> {
     if s.0.len() < 3 {
         return Err(Error::TooFewSamples {
             what: format!("{what} {} signal", method.as_str()),
@@ -165,7 +134,7 @@ fn checked<S: std::ops::Deref<Target = Signal>>(
             need: 3,
         });
     }
-    Ok(s)
+    Ok(())
 }
 
 /// σ of white position noise per coordinate from the norms of the third differences of evenly spaced

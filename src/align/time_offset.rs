@@ -39,7 +39,7 @@ use crate::align::curvature::CurvatureParams;
 use crate::align::fine_sums::fine_sums;
 use crate::align::grid::resample;
 use crate::align::offset_sigma::offset_sigma;
-pub use crate::align::signals::{method_signal, Intervals, Pair, Signal, SignalCache, SignalPair};
+pub use crate::align::signals::{Intervals, Pair, Signal, SignalCache, SignalPair};
 use crate::align::xcorr::{masked_ncc, Centering};
 use crate::error::{Error, Result};
 
