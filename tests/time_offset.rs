@@ -66,6 +66,35 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(16))]
+    /// Long signals against few lags: the correlation runs over many blocks of `a` (overlap-add), and
+    /// must still give the direct sums at every lag.
+    #[test]
+    fn blocked_ncc_matches_direct_sums_over_many_blocks(
+        (a, ma) in signal_strategy(6000),
+        (b, mb) in signal_strategy(6000),
+        lo in -80i64..40,
+        width in 0i64..60,
+    ) {
+        let hi = lo + width;
+        for centering in [Centering::Raw, Centering::MeanRemoved] {
+            let fft = masked_ncc(&a, &ma, &b, &mb, lo, hi, centering);
+            prop_assert_eq!(&fft.overlap, &masked_ncc_direct(&a, &ma, &b, &mb, lo, hi, centering).overlap);
+            for i in 0..fft.len() {
+                let s = overlap_sums(&a, &ma, &b, &mb, fft.lag(i));
+                if s.n < 30.0 {
+                    continue;
+                }
+                prop_assert!(
+                    (fft.ncc[i] - s.ncc(centering)).abs() < 1e-9,
+                    "lag {}: blocked {} direct {} ({:?})", fft.lag(i), fft.ncc[i], s.ncc(centering), centering
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn ncc_of_a_shifted_copy_peaks_at_the_shift() {
     // b[j] = a[j − 7]: the lag pairing a[j] with b[j + 7] matches exactly.

@@ -18,7 +18,7 @@
 //! with time: Δt(t) = Δt(t_mid) − drift_ppm·10⁻⁶·(t − t_mid).
 
 use crate::align::offset_profile::{OffsetProfile, ProfileWindow, SIGMA_FLOOR_S};
-use crate::align::time_offset::{Pair, Signal};
+use crate::align::time_offset::{Pair, SignalView};
 
 /// A model must lower the BIC by this much to replace `constant`.
 pub const BIC_MARGIN: f64 = 10.0;
@@ -261,7 +261,7 @@ fn segment(w: &[ProfileWindow], min_len: usize, rho: f64, n_eff: f64) -> Vec<usi
 pub fn choose_model(
     profile: &OffsetProfile,
     whole: (f64, Option<f64>),
-    signals: (&Signal, &Signal),
+    signals: (SignalView<'_>, SignalView<'_>),
     forced: Option<OffsetModel>,
 ) -> ClockModel {
     let w = profile.usable();
@@ -360,7 +360,7 @@ fn fill(
     model: &mut ClockModel,
     f: &Fits<'_>,
     profile: &OffsetProfile,
-    signals: (&Signal, &Signal),
+    signals: (SignalView<'_>, SignalView<'_>),
     why: &str,
 ) {
     match model.model {
@@ -419,7 +419,7 @@ fn piecewise_segments(
     w: &[ProfileWindow],
     splits: &[usize],
     profile: &OffsetProfile,
-    (r, e): (&Signal, &Signal),
+    (r, e): (SignalView<'_>, SignalView<'_>),
 ) -> Vec<ClockSegment> {
     let half = 0.5 * profile.window_s;
     let rho = profile.redundancy();
@@ -468,28 +468,33 @@ fn piecewise_segments(
 /// Δt₁ and starts matching it at Δt₂: the τ minimising Σ_{t<τ} (z_e − z_r(t + Δt₁))² +
 /// Σ_{t≥τ} (z_e − z_r(t + Δt₂))² over the estimate's samples (z: each signal standardised).
 pub fn locate_change(
-    (r, e): (&Signal, &Signal),
+    (r, e): (SignalView<'_>, SignalView<'_>),
     (d1, d2): (f64, f64),
     (lo, hi): (f64, f64),
 ) -> Option<f64> {
-    let stats = |v: &[f64]| {
-        let n = v.len() as f64;
-        let m = v.iter().sum::<f64>() / n;
-        let s = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n).sqrt();
-        (m, s.max(1e-12))
+    let stats = |s: &SignalView<'_>| {
+        let n = s.t.len() as f64;
+        let m = (0..s.t.len()).map(|i| s.value(i)).sum::<f64>() / n;
+        let var = (0..s.t.len())
+            .map(|i| (s.value(i) - m).powi(2))
+            .sum::<f64>()
+            / n;
+        (m, var.sqrt().max(1e-12))
     };
-    let ((mr, sr), (me, se)) = (stats(&r.1), stats(&e.1));
+    let ((mr, sr), (me, se)) = (stats(&r), stats(&e));
     let at = |t: f64| -> Option<f64> {
-        let i = r.0.partition_point(|&x| x < t);
-        if i == 0 || i >= r.0.len() || r.0[i] - r.0[i - 1] > 1.0 {
+        let i = r.t.partition_point(|&x| x < t);
+        if i == 0 || i >= r.t.len() || r.t[i] - r.t[i - 1] > 1.0 {
             return None;
         }
-        let f = (t - r.0[i - 1]) / (r.0[i] - r.0[i - 1]);
-        Some((r.1[i - 1] + f * (r.1[i] - r.1[i - 1]) - mr) / sr)
+        let f = (t - r.t[i - 1]) / (r.t[i] - r.t[i - 1]);
+        let (v0, v1) = (r.value(i - 1), r.value(i));
+        Some((v0 + f * (v1 - v0) - mr) / sr)
     };
     // (reference time, cost before, cost after) per estimate sample in the stretch.
     let mut pts: Vec<(f64, f64, f64)> = Vec::new();
-    for (&t, &v) in e.0.iter().zip(&e.1) {
+    for (i, &t) in e.t.iter().enumerate() {
+        let v = e.value(i);
         let tr = t + d1;
         if tr < lo || tr > hi {
             continue;
@@ -541,13 +546,20 @@ pub fn clock_model_of(
     profile: &crate::align::offset_profile::ProfileParams,
     forced: Option<OffsetModel>,
 ) -> crate::error::Result<(OffsetProfile, ClockModel)> {
-    let (p, (r, e)) = crate::align::offset_profile::offset_profile(
+    let ((r, e), lever) =
+        crate::align::time_offset::prepared_signals(whole.method, pair, params, whole.offset_s)?;
+    let e = match lever {
+        Some(d) => SignalView::with_lever(&e, d),
+        None => SignalView::of(&e),
+    };
+    let r = SignalView::of(&r);
+    let p = crate::align::offset_profile::offset_profile(
         whole.method,
-        pair,
+        (r, e),
         params,
         whole.offset_s,
         profile,
-    )?;
-    let m = choose_model(&p, (whole.offset_s, whole.sigma_s), (&r, &e), forced);
+    );
+    let m = choose_model(&p, (whole.offset_s, whole.sigma_s), (r, e), forced);
     Ok((p, m))
 }

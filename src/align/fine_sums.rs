@@ -18,12 +18,13 @@
 //! integers below 2⁵³ (exact in f64); the others use block-local indices, so their rounding stays near
 //! 1e-12 of the sums (`tests` compares with the direct sums).
 
-use crate::align::grid::{resample_finite_on_grid, RegularSignal};
+use crate::align::grid::resample_into;
 use crate::align::xcorr::OverlapSums;
 
 /// Dense fine-grid points per block (at least 4× the lag span): bounds the buffers on long missions and
-/// keeps the mask's third-order prefix sums below 2⁵³.
-const BLOCK: usize = 1 << 16;
+/// keeps the mask's third-order prefix sums below 2⁵³. The eight buffers of a block (64 KB each) are
+/// reused from block to block: allocated once per search, they stay in the cache.
+const BLOCK: usize = 1 << 13;
 
 /// Overlap sums at the lags `lo..=hi`, pairing `a` at grid point n with `b` at n + k (Δt = k·hf), as
 /// if both were resampled on the grid t = n·hf with gaps longer than `gap` left undefined. Times
@@ -166,26 +167,43 @@ struct Prefix {
 }
 
 impl Prefix {
-    fn of(g: &RegularSignal) -> Prefix {
-        let n = g.len();
-        let mut p = Prefix {
-            m0: Vec::with_capacity(n + 1),
-            m1: Vec::with_capacity(n + 1),
-            m2: Vec::with_capacity(n + 1),
-            d0: Vec::with_capacity(n + 1),
-            d1: Vec::with_capacity(n + 1),
-            dd: Vec::with_capacity(n + 1),
-        };
+    /// Empty prefix sums, with room for blocks of `n` points.
+    fn with_capacity(n: usize) -> Prefix {
+        let v = || Vec::with_capacity(n + 1);
+        Prefix {
+            m0: v(),
+            m1: v(),
+            m2: v(),
+            d0: v(),
+            d1: v(),
+            dd: v(),
+        }
+    }
+
+    /// The prefix sums of one block (values, mask), in place of the previous block's: the buffers
+    /// are reused from block to block.
+    fn fill(&mut self, values: &[f64], mask: &[f64]) {
+        let n = values.len().min(mask.len());
+        for v in [
+            &mut self.m0,
+            &mut self.m1,
+            &mut self.m2,
+            &mut self.d0,
+            &mut self.d1,
+            &mut self.dd,
+        ] {
+            v.clear();
+        }
         let (mut m0, mut m1, mut m2, mut d0, mut d1, mut dd) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
         for q in 0..=n {
-            p.m0.push(m0);
-            p.m1.push(m1);
-            p.m2.push(m2);
-            p.d0.push(d0);
-            p.d1.push(d1);
-            p.dd.push(dd);
+            self.m0.push(m0);
+            self.m1.push(m1);
+            self.m2.push(m2);
+            self.d0.push(d0);
+            self.d1.push(d1);
+            self.dd.push(dd);
             if q < n {
-                let (m, d, x) = (g.mask[q], g.values[q], q as f64);
+                let (m, d, x) = (mask[q], values[q], q as f64);
                 m0 += m;
                 m1 += x * m;
                 m2 += x * x * m;
@@ -194,7 +212,6 @@ impl Prefix {
                 dd += d * d;
             }
         }
-        p
     }
 
     /// Adds to every lag the sums of `run`, whose points meet D's local indices from `base + x` at
@@ -277,6 +294,11 @@ fn sums_against_runs(
     let slots: Vec<f64> = (0..lags).map(|x| x as f64).collect();
     let (kmin, kmax) = ((sigma * lo).min(sigma * hi), (sigma * lo).max(sigma * hi));
     let block = BLOCK.max(4 * lags);
+    // One block of D's grid and its prefix sums at a time, in buffers reused from block to block.
+    let span = runs.last().map_or(0, |r| r.m0 + r.len as i64) - runs.first().map_or(0, |r| r.m0);
+    let cap = (block + lags).min(span.max(0) as usize + lags);
+    let (mut values, mut mask) = (Vec::with_capacity(cap), Vec::with_capacity(cap));
+    let mut prefix = Prefix::with_capacity(cap);
     let mut i = 0;
     while i < runs.len() {
         // One block of D's grid from the first pending run's reach; every run that fits in it.
@@ -289,8 +311,10 @@ fn sums_against_runs(
         let end = end.max(i + 1);
         let last = &runs[end - 1];
         let len = (last.m0 + last.len as i64 - 1 + kmax - j0 + 1) as usize;
-        let dense = resample_finite_on_grid(dt, dv, hf, j0, len, gap);
-        let prefix = Prefix::of(&dense);
+        values.resize(len, 0.0);
+        mask.resize(len, 0.0);
+        resample_into((dt, dv), (hf, 0.0), j0, (&mut values, &mut mask), gap);
+        prefix.fill(&values, &mask);
         for run in &runs[i..end] {
             prefix.add_run(run, (run.m0 + kmin - j0) as usize, &slots, &mut sums);
         }

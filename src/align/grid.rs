@@ -87,8 +87,7 @@ pub fn resample_on_grid(
 }
 
 /// [`resample_on_grid`] of samples that are all finite, `times` non-decreasing and as long as
-/// `values`: no copy of the samples, and the first one found by bisection, so that a long signal
-/// resampled block by block costs each block its own length only.
+/// `values`: no copy of the samples (see [`resample_into`]).
 pub fn resample_finite_on_grid(
     times: &[f64],
     values: &[f64],
@@ -103,23 +102,46 @@ pub fn resample_finite_on_grid(
         values: vec![0.0; len],
         mask: vec![0.0; len],
     };
+    resample_into(
+        (times, values),
+        (step, 0.0),
+        first_index,
+        (&mut out.values, &mut out.mask),
+        max_gap_s,
+    );
+    out
+}
+
+/// Writes the resampling of finite samples (`times` non-decreasing, as long as `values`) at the grid
+/// points n = `first_index`, `first_index + 1`, … into `out` (values, mask; as long as each other):
+/// value and 1 where defined, 0 and 0 where not. Grid point n is at time n·step − `shift_s` of the
+/// samples' clock (a grid on a clock `shift_s` ahead). The first sample is found by bisection, so
+/// that a long signal read block by block costs each block its own length only.
+pub fn resample_into(
+    (times, values): (&[f64], &[f64]),
+    (step, shift_s): (f64, f64),
+    first_index: i64,
+    (out_v, out_m): (&mut [f64], &mut [f64]),
+    max_gap_s: f64,
+) {
+    out_v.fill(0.0);
+    out_m.fill(0.0);
     if times.is_empty() || step.is_nan() || step <= 0.0 {
-        return out;
+        return;
     }
     // Grid times rise monotonically, so one cursor walks the samples once; it starts at the last
     // sample at or before the first grid time.
     let tol = 1e-9 * step;
-    let first_t = first_index as f64 * step;
+    let first_t = first_index as f64 * step - shift_s;
     let mut k = times.partition_point(|&x| x <= first_t).saturating_sub(1);
-    for i in 0..len {
-        let t = (first_index + i as i64) as f64 * step;
+    for (i, (v, m)) in out_v.iter_mut().zip(out_m.iter_mut()).enumerate() {
+        let t = (first_index + i as i64) as f64 * step - shift_s;
         while k + 1 < times.len() && times[k + 1] <= t {
             k += 1;
         }
         let (t0, v0) = (times[k], values[k]);
         if (t - t0).abs() <= tol {
-            out.values[i] = v0;
-            out.mask[i] = 1.0;
+            (*v, *m) = (v0, 1.0);
             continue;
         }
         if t < t0 || k + 1 >= times.len() {
@@ -131,10 +153,152 @@ pub fn resample_finite_on_grid(
             continue;
         }
         let w = (t - t0) / gap;
-        out.values[i] = v0 + w * (v1 - v0);
-        out.mask[i] = 1.0;
+        (*v, *m) = (v0 + w * (v1 - v0), 1.0);
     }
-    out
+}
+
+/// A signal on a regular grid read a block at a time, so that a long one need not be held whole:
+/// the masked cross-correlation ([`crate::align::xcorr::masked_ncc_blocks`]) reads its inputs this
+/// way.
+pub trait GridBlocks {
+    /// Number of grid points.
+    fn len(&self) -> usize;
+
+    /// Writes the values (0 where undefined) and the mask (1 or 0) of points `start`,
+    /// `start + 1`, … (0-based; points outside `0..len()` are undefined) into `values` and `mask`,
+    /// which are as long as each other.
+    fn read(&self, start: i64, values: &mut [f64], mask: &mut [f64]);
+
+    /// True when the grid has no point.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Number of defined points, read in blocks.
+    fn defined_count(&self) -> usize {
+        const BLOCK: usize = 1 << 14;
+        let (mut v, mut m) = (vec![0.0; BLOCK], vec![0.0; BLOCK]);
+        (0..self.len())
+            .step_by(BLOCK)
+            .map(|s| {
+                let n = BLOCK.min(self.len() - s);
+                self.read(s as i64, &mut v[..n], &mut m[..n]);
+                m[..n].iter().filter(|&&x| x > 0.5).count()
+            })
+            .sum()
+    }
+}
+
+/// Values and a mask held whole (values where the mask is 0 are read as 0).
+#[derive(Debug, Clone, Copy)]
+pub struct MaskedSlices<'a> {
+    /// Values.
+    pub values: &'a [f64],
+    /// 1 where the value is defined, 0 where not.
+    pub mask: &'a [f64],
+}
+
+impl GridBlocks for MaskedSlices<'_> {
+    fn len(&self) -> usize {
+        self.values.len().min(self.mask.len())
+    }
+
+    fn read(&self, start: i64, values: &mut [f64], mask: &mut [f64]) {
+        let n = self.len() as i64;
+        for (i, (v, m)) in values.iter_mut().zip(mask.iter_mut()).enumerate() {
+            let j = start + i as i64;
+            (*v, *m) = if (0..n).contains(&j) && self.mask[j as usize] > 0.5 {
+                (self.values[j as usize], 1.0)
+            } else {
+                (0.0, 0.0)
+            };
+        }
+    }
+}
+
+/// The resampling of samples onto every grid point of their span (what [`resample`] returns),
+/// computed where it is read.
+#[derive(Debug, Clone)]
+pub struct LazyGrid<'a> {
+    times: std::borrow::Cow<'a, [f64]>,
+    values: std::borrow::Cow<'a, [f64]>,
+    /// Index n of the first grid point (its time is `first_index as f64 * step`).
+    pub first_index: i64,
+    len: usize,
+    step: f64,
+    shift_s: f64,
+    max_gap_s: f64,
+}
+
+impl<'a> LazyGrid<'a> {
+    /// The grid of [`resample`]`(times, values, step, max_gap_s)`; the samples are borrowed, or
+    /// copied without their non-finite entries when there are any.
+    pub fn new(times: &'a [f64], values: &'a [f64], step: f64, max_gap_s: f64) -> Self {
+        Self::shifted(times, values, step, max_gap_s, 0.0)
+    }
+
+    /// [`LazyGrid::new`] of the samples at `times + shift_s` (without a shifted copy of the times).
+    pub fn shifted(
+        times: &'a [f64],
+        values: &'a [f64],
+        step: f64,
+        max_gap_s: f64,
+        shift_s: f64,
+    ) -> Self {
+        use std::borrow::Cow;
+        let n = times.len().min(values.len());
+        let (times, values) = if (0..n).all(|k| times[k].is_finite() && values[k].is_finite()) {
+            (Cow::Borrowed(&times[..n]), Cow::Borrowed(&values[..n]))
+        } else {
+            let (t, v): (Vec<f64>, Vec<f64>) = times
+                .iter()
+                .zip(values)
+                .filter(|(t, v)| t.is_finite() && v.is_finite())
+                .unzip();
+            (Cow::Owned(t), Cow::Owned(v))
+        };
+        let span = match (times.first(), times.last()) {
+            (Some(&lo), Some(&hi)) => grid_span(lo + shift_s, hi + shift_s, step),
+            _ => None,
+        };
+        let (first_index, len) = span.map_or((0, 0), |(a, b)| (a, (b - a + 1) as usize));
+        LazyGrid {
+            times,
+            values,
+            first_index,
+            len,
+            step,
+            shift_s,
+            max_gap_s,
+        }
+    }
+}
+
+impl GridBlocks for LazyGrid<'_> {
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    fn read(&self, start: i64, values: &mut [f64], mask: &mut [f64]) {
+        let n = values.len().min(mask.len()) as i64;
+        let (values, mask) = (&mut values[..n as usize], &mut mask[..n as usize]);
+        values.fill(0.0);
+        mask.fill(0.0);
+        // Only the points inside 0..len are resampled.
+        let lo = start.max(0);
+        let hi = (start + n).min(self.len as i64);
+        if lo >= hi {
+            return;
+        }
+        let (a, b) = ((lo - start) as usize, (hi - start) as usize);
+        resample_into(
+            (&self.times, &self.values),
+            (self.step, self.shift_s),
+            self.first_index + lo,
+            (&mut values[a..b], &mut mask[a..b]),
+            self.max_gap_s,
+        );
+    }
 }
 
 /// Resamples onto every grid point t = n·step inside the samples' span (see [`resample_on_grid`]).
@@ -188,6 +352,43 @@ mod tests {
         }
         // With a max gap of 5 s the gap is bridged.
         assert_eq!(resample(&t, &v, 0.01, 5.0).defined_count(), 501);
+    }
+
+    #[test]
+    fn a_lazy_grid_reads_what_resample_holds() {
+        // Irregular times with a gap and a non-finite sample; read in blocks that straddle both
+        // ends and the gap, with and without a shift of the clock.
+        let mut t: Vec<f64> = (0..300)
+            .map(|i| 0.013 + i as f64 * 0.037 + 0.01 * (i as f64).sin())
+            .collect();
+        t.extend((0..200).map(|i| 14.0 + i as f64 * 0.05));
+        let mut v: Vec<f64> = t.iter().map(|t| (0.3 * t).sin()).collect();
+        v[17] = f64::NAN;
+        for shift in [0.0, 0.1234, -3.0] {
+            let shifted: Vec<f64> = t.iter().map(|x| x + shift).collect();
+            let whole = resample(&shifted, &v, 0.02, 0.5);
+            let lazy = LazyGrid::shifted(&t, &v, 0.02, 0.5, shift);
+            assert_eq!(lazy.first_index, whole.first_index);
+            assert_eq!(lazy.len(), whole.len());
+            assert_eq!(lazy.defined_count(), whole.defined_count());
+            let (mut bv, mut bm) = (vec![0.0; 97], vec![0.0; 97]);
+            for start in (-50..whole.len() as i64 + 50).step_by(97) {
+                lazy.read(start, &mut bv, &mut bm);
+                for (i, (&x, &m)) in bv.iter().zip(&bm).enumerate() {
+                    let j = start + i as i64;
+                    let (wx, wm) = if (0..whole.len() as i64).contains(&j) {
+                        (whole.values[j as usize], whole.mask[j as usize])
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    assert_eq!(m, wm, "shift {shift}, point {j}");
+                    assert!(
+                        (x - wx).abs() < 1e-12,
+                        "shift {shift}, point {j}: {x} vs {wx}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

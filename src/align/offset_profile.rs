@@ -24,10 +24,7 @@
 
 use rayon::prelude::*;
 
-use crate::align::time_offset::{
-    prepared_signals, search_signals, OffsetMethod, OffsetParams, Pair, Signal, SignalPair,
-};
-use crate::error::Result;
+use crate::align::time_offset::{search_signals, OffsetMethod, OffsetParams, SignalView};
 
 /// Residual offset searched in each window around the whole mission's Δt₀, seconds.
 pub const SEARCH_S: f64 = 3.0;
@@ -101,24 +98,11 @@ pub fn window_and_step(span_s: f64, p: &ProfileParams) -> (f64, f64) {
     (w, s)
 }
 
-/// The profile of `method` around the whole mission's `offset_s` (see the module doc), over the
-/// signals of `pair` (computed once, shared with the whole-mission search), and those signals.
+/// The profile of `method` over the signals `r` and `e` (the estimate's on its own clock) around the
+/// whole mission's `offset_s`: the windows correlate slices of them.
 pub fn offset_profile(
     method: OffsetMethod,
-    pair: &Pair<'_>,
-    params: &OffsetParams,
-    offset_s: f64,
-    profile: &ProfileParams,
-) -> Result<(OffsetProfile, SignalPair)> {
-    let (r, e) = prepared_signals(method, pair, params, offset_s)?;
-    let p = profile_of_signals(method, (&r, &e), params, offset_s, profile);
-    Ok((p, (r, e)))
-}
-
-/// [`offset_profile`] over signals already computed ([`prepared_signals`]).
-pub fn profile_of_signals(
-    method: OffsetMethod,
-    (r, e): (&Signal, &Signal),
+    (r, e): (SignalView<'_>, SignalView<'_>),
     params: &OffsetParams,
     offset_s: f64,
     profile: &ProfileParams,
@@ -126,10 +110,9 @@ pub fn profile_of_signals(
     // Shifted by a whole number of coarse steps (the grid's phase does not move with the last
     // digits of Δt₀); the windows' answers are relative to that.
     let offset_s = (offset_s / params.coarse_grid_s).round() * params.coarse_grid_s;
-    let shifted: Vec<f64> = e.0.iter().map(|t| t + offset_s).collect();
     let (a, b) = (
-        r.0[0].max(shifted[0]),
-        r.0[r.0.len() - 1].min(shifted[shifted.len() - 1]),
+        r.t[0].max(e.t[0] + offset_s),
+        r.t[r.t.len() - 1].min(e.t[e.t.len() - 1] + offset_s),
     );
     let (window_s, step_s) = window_and_step(b - a, profile);
     let p = OffsetParams {
@@ -149,7 +132,7 @@ pub fn profile_of_signals(
         .into_par_iter()
         .filter_map(|k| {
             let lo = a + k as f64 * step_s;
-            one_window(method, (r, e), &shifted, &p, (lo, lo + window_s), offset_s)
+            one_window(method, (r, e), &p, (lo, lo + window_s), offset_s)
         })
         .collect();
     let residual: Vec<f64> = raw
@@ -190,22 +173,27 @@ pub fn profile_of_signals(
 }
 
 /// The search on the window [lo, hi] of the reference clock: the reference's signal cut to it, the
-/// estimate's (`shifted` by Δt₀) reaching past it by the search range and the speed window.
+/// estimate's (shifted by Δt₀, a window's worth at a time) reaching past it by the search range and
+/// the speed window.
 fn one_window(
     method: OffsetMethod,
-    (r, e): (&Signal, &Signal),
-    shifted: &[f64],
+    (r, e): (SignalView<'_>, SignalView<'_>),
     p: &OffsetParams,
     (lo, hi): (f64, f64),
     offset_s: f64,
 ) -> Option<ProfileWindow> {
     let margin = SEARCH_S + p.speed_window_s;
-    let ri = range(&r.0, lo, hi);
-    let ei = range(shifted, lo - margin, hi + margin);
+    let ri = range(r.t, lo, hi);
+    // The estimate's samples whose shifted times fall in the stretch (the same sums as a shifted
+    // copy of every time would give).
+    let (elo, ehi) = (lo - margin, hi + margin);
+    let ei =
+        e.t.partition_point(|&x| x + offset_s < elo)..e.t.partition_point(|&x| x + offset_s <= ehi);
+    let shifted: Vec<f64> = e.t[ei.clone()].iter().map(|t| t + offset_s).collect();
     let o = search_signals(
         method,
-        (&r.0[ri.clone()], &r.1[ri]),
-        (&shifted[ei.clone()], &e.1[ei]),
+        (&r.t[ri.clone()], &r.values(ri)),
+        (&shifted, &e.values(ei)),
         p,
     )
     .ok()?;

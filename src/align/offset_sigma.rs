@@ -17,7 +17,7 @@
 //! What the residual cannot show is noise that has already moved the peak (at the peak it is no
 //! longer in the residual): [`crate::align::offset_profile`] scales it by the scatter of the profile.
 
-use crate::align::grid::resample;
+use crate::align::grid::{GridBlocks, LazyGrid};
 use crate::align::xcorr::Centering;
 
 /// Length of the blocks of the batch-means variance, seconds: longer than the speed window and than a
@@ -30,6 +30,9 @@ pub const MIN_BLOCKS: usize = 3;
 /// The standard error of `offset_s`, seconds, for the signals `reference` and `estimate` (times,
 /// values) compared on a grid of `step` with gaps longer than `max_gap_s` left undefined. `None` when
 /// the overlap holds fewer than [`MIN_BLOCKS`] blocks or a signal is flat.
+///
+/// One pass over the grid, read a stretch at a time: every sum below is a running sum (globally and
+/// per block), so no grid and no list of points is held, whatever the mission's length.
 pub fn offset_sigma(
     (ref_t, ref_v): (&[f64], &[f64]),
     (est_t, est_v): (&[f64], &[f64]),
@@ -38,95 +41,173 @@ pub fn offset_sigma(
     max_gap_s: f64,
     centering: Centering,
 ) -> Option<f64> {
-    let x = resample(ref_t, ref_v, step, max_gap_s);
-    let y = {
-        // Dropped once resampled (a second copy of the estimate's times).
-        let shifted: Vec<f64> = est_t.iter().map(|t| t + offset_s).collect();
-        resample(&shifted, est_v, step, max_gap_s)
-    };
+    let x = LazyGrid::new(ref_t, ref_v, step, max_gap_s);
+    let y = LazyGrid::shifted(est_t, est_v, step, max_gap_s, offset_s);
     let lo = x.first_index.max(y.first_index);
     let hi = (x.first_index + x.len() as i64).min(y.first_index + y.len() as i64);
-    let defined = |s: &crate::align::grid::RegularSignal, n: i64| {
-        let i = n - s.first_index;
-        (0..s.len() as i64).contains(&i) && s.mask[i as usize] > 0.5
-    };
-    let value =
-        |s: &crate::align::grid::RegularSignal, n: i64| s.values[(n - s.first_index) as usize];
-    // Grid points where both signals and both central differences are defined.
-    let points: Vec<GridPoint> = (lo + 1..hi - 1)
-        .filter(|&n| (n - 1..=n + 1).all(|m| defined(&x, m) && defined(&y, m)))
-        .map(|n| GridPoint {
-            n,
-            x: value(&x, n),
-            y: value(&y, n),
-            dx: (value(&x, n + 1) - value(&x, n - 1)) / (2.0 * step),
-            dy: (value(&y, n + 1) - value(&y, n - 1)) / (2.0 * step),
-        })
-        .collect();
     let block = (BLOCK_S / step).round().max(1.0) as i64;
-    if points.len() < 3 || (points[points.len() - 1].n - points[0].n) < MIN_BLOCKS as i64 * block {
+    let mut sums = Sums::new(centering == Centering::MeanRemoved, block);
+    // Grid points where both signals and both central differences are defined, a stretch at a time
+    // (with one point either side for the differences).
+    const STRETCH: i64 = 1 << 12;
+    let len = (STRETCH + 2) as usize;
+    let (mut xv, mut xm, mut yv, mut ym) = (
+        vec![0.0; len],
+        vec![0.0; len],
+        vec![0.0; len],
+        vec![0.0; len],
+    );
+    let mut start = lo + 1;
+    while start < hi - 1 {
+        let count = STRETCH.min(hi - 1 - start) as usize;
+        x.read(
+            start - 1 - x.first_index,
+            &mut xv[..count + 2],
+            &mut xm[..count + 2],
+        );
+        y.read(
+            start - 1 - y.first_index,
+            &mut yv[..count + 2],
+            &mut ym[..count + 2],
+        );
+        for i in 1..=count {
+            if xm[i - 1..=i + 1]
+                .iter()
+                .chain(&ym[i - 1..=i + 1])
+                .all(|&m| m > 0.5)
+            {
+                let dx = (xv[i + 1] - xv[i - 1]) / (2.0 * step);
+                let dy = (yv[i + 1] - yv[i - 1]) / (2.0 * step);
+                sums.add(start + i as i64 - 1, (xv[i], yv[i]), (dx, dy));
+            }
+        }
+        start += STRETCH;
+    }
+    if sums.count < 3 || sums.last_n - sums.first_n < MIN_BLOCKS as i64 * block {
         return None;
     }
     // Either signal may carry the noise (a GNSS reference is usually the noisier, an odometry
     // estimate the smoother): the slope is taken from one, the residual against the other, both
     // ways, and the larger error kept.
-    let a = one_way(&points, |p| (p.x, p.y, p.dx), centering, block);
-    let b = one_way(&points, |p| (p.y, p.x, p.dy), centering, block);
-    match (a, b) {
+    match (
+        sums.one_way(Direction::SlopeOfX),
+        sums.one_way(Direction::SlopeOfY),
+    ) {
         (Some(a), Some(b)) => Some(a.max(b)),
         (a, b) => a.or(b),
     }
 }
 
-/// One grid point where both signals are defined: index, values, central differences.
-struct GridPoint {
-    n: i64,
-    x: f64,
-    y: f64,
-    dx: f64,
-    dy: f64,
+/// Which signal the slope is taken from.
+#[derive(Clone, Copy)]
+enum Direction {
+    SlopeOfX,
+    SlopeOfY,
 }
 
-/// The standard error with the slope taken from the first signal `pick` returns (value, other
-/// value, slope of the first).
-fn one_way(
-    points: &[GridPoint],
-    pick: fn(&GridPoint) -> (f64, f64, f64),
-    centering: Centering,
+/// The running sums of one pass. Values are taken relative to the first point's when the means
+/// are removed (shifted sums: no cancellation between Σu² and N·ū²).
+struct Sums {
+    centered: bool,
     block: i64,
-) -> Option<f64> {
-    let count = points.len() as f64;
-    let (mx, my) = match centering {
-        Centering::MeanRemoved => (
-            points.iter().map(|p| pick(p).0).sum::<f64>() / count,
-            points.iter().map(|p| pick(p).1).sum::<f64>() / count,
-        ),
-        Centering::Raw => (0.0, 0.0),
-    };
-    let sxx: f64 = points.iter().map(|p| (pick(p).0 - mx).powi(2)).sum();
-    let sxy: f64 = points
-        .iter()
-        .map(|p| (pick(p).0 - mx) * (pick(p).1 - my))
-        .sum();
-    let sdd: f64 = points.iter().map(|p| pick(p).2.powi(2)).sum();
-    if !(sxx > 0.0 && sdd > 0.0) {
-        return None;
-    }
-    let gain = sxy / sxx;
-    // Batch means of z = x′·r over consecutive blocks of the grid.
-    let first = points[0].n;
-    let mut sums: Vec<f64> = Vec::new();
-    for p in points {
-        let (xv, yv, d) = pick(p);
-        let b = ((p.n - first) / block) as usize;
-        if sums.len() <= b {
-            sums.resize(b + 1, 0.0);
+    origin: (f64, f64),
+    count: usize,
+    first_n: i64,
+    last_n: i64,
+    /// Σx, Σy, Σx², Σy², Σxy, Σx′², Σy′².
+    x: f64,
+    y: f64,
+    xx: f64,
+    yy: f64,
+    xy: f64,
+    dxdx: f64,
+    dydy: f64,
+    /// Per block: Σx′·y, Σx′, Σx′·x, Σy′·x, Σy′, Σy′·y.
+    blocks: Vec<[f64; 6]>,
+}
+
+impl Sums {
+    fn new(centered: bool, block: i64) -> Self {
+        Sums {
+            centered,
+            block,
+            origin: (0.0, 0.0),
+            count: 0,
+            first_n: 0,
+            last_n: 0,
+            x: 0.0,
+            y: 0.0,
+            xx: 0.0,
+            yy: 0.0,
+            xy: 0.0,
+            dxdx: 0.0,
+            dydy: 0.0,
+            blocks: Vec::new(),
         }
-        sums[b] += d * ((yv - my) - gain * (xv - mx));
     }
-    let var_sum: f64 = sums.iter().map(|s| s * s).sum();
-    let sigma = var_sum.sqrt() / (gain.abs() * sdd);
-    sigma.is_finite().then_some(sigma)
+
+    fn add(&mut self, n: i64, (x, y): (f64, f64), (dx, dy): (f64, f64)) {
+        if self.count == 0 {
+            self.first_n = n;
+            if self.centered {
+                self.origin = (x, y);
+            }
+        }
+        self.count += 1;
+        self.last_n = n;
+        let (x, y) = (x - self.origin.0, y - self.origin.1);
+        self.x += x;
+        self.y += y;
+        self.xx += x * x;
+        self.yy += y * y;
+        self.xy += x * y;
+        self.dxdx += dx * dx;
+        self.dydy += dy * dy;
+        let b = ((n - self.first_n) / self.block) as usize;
+        if self.blocks.len() <= b {
+            self.blocks.resize(b + 1, [0.0; 6]);
+        }
+        let s = &mut self.blocks[b];
+        for (acc, v) in s.iter_mut().zip([dx * y, dx, dx * x, dy * x, dy, dy * y]) {
+            *acc += v;
+        }
+    }
+
+    /// The standard error with the slope taken from one signal u, the residual of the other v
+    /// against g·u: r = (v − v̄) − g·(u − ū), g the least-squares gain, and the batch means of
+    /// z = u′·r, Σ_{k∈b} z_k = Σu′v − v̄·Σu′ − g·(Σu′u − ū·Σu′) per block.
+    fn one_way(&self, direction: Direction) -> Option<f64> {
+        let n = self.count as f64;
+        let (su, sv, suu, sdd) = match direction {
+            Direction::SlopeOfX => (self.x, self.y, self.xx, self.dxdx),
+            Direction::SlopeOfY => (self.y, self.x, self.yy, self.dydy),
+        };
+        let (mu, mv) = if self.centered {
+            (su / n, sv / n)
+        } else {
+            (0.0, 0.0)
+        };
+        let suu = suu - n * mu * mu;
+        let suv = self.xy - n * mu * mv;
+        if !(suu > 0.0 && sdd > 0.0) {
+            return None;
+        }
+        let gain = suv / suu;
+        let var_sum: f64 = self
+            .blocks
+            .iter()
+            .map(|b| {
+                let (duv, du, duu) = match direction {
+                    Direction::SlopeOfX => (b[0], b[1], b[2]),
+                    Direction::SlopeOfY => (b[3], b[4], b[5]),
+                };
+                let z = duv - mv * du - gain * (duu - mu * du);
+                z * z
+            })
+            .sum();
+        let sigma = var_sum.sqrt() / (gain.abs() * sdd);
+        sigma.is_finite().then_some(sigma)
+    }
 }
 
 #[cfg(test)]
@@ -165,6 +246,93 @@ mod tests {
             .sum();
         let want = sigma_n / sdd.sqrt();
         assert!(got > 0.5 * want && got < 2.0 * want, "{got} vs {want}");
+    }
+
+    /// The definition, two passes over a list of points (what σ computed before it was streamed).
+    fn two_pass(
+        (rt, rv): (&[f64], &[f64]),
+        (et, ev): (&[f64], &[f64]),
+        offset_s: f64,
+        step: f64,
+        gap: f64,
+        centering: Centering,
+    ) -> Option<f64> {
+        use crate::align::grid::resample;
+        let x = resample(rt, rv, step, gap);
+        let shifted: Vec<f64> = et.iter().map(|t| t + offset_s).collect();
+        let y = resample(&shifted, ev, step, gap);
+        let at = |s: &crate::align::grid::RegularSignal, n: i64| {
+            let i = n - s.first_index;
+            ((0..s.len() as i64).contains(&i) && s.mask[i as usize] > 0.5)
+                .then(|| s.values[i as usize])
+        };
+        // (n, x, y, x′, y′) where both signals and both differences are defined.
+        type Point = (i64, f64, f64, f64, f64);
+        let pts: Vec<Point> = (x.first_index.min(y.first_index) - 2
+            ..x.first_index.max(y.first_index) + x.len().max(y.len()) as i64 + 2)
+            .filter_map(|n| {
+                let xs = [at(&x, n - 1)?, at(&x, n)?, at(&x, n + 1)?];
+                let ys = [at(&y, n - 1)?, at(&y, n)?, at(&y, n + 1)?];
+                let d = |v: [f64; 3]| (v[2] - v[0]) / (2.0 * step);
+                Some((n, xs[1], ys[1], d(xs), d(ys)))
+            })
+            .collect();
+        let block = (BLOCK_S / step).round() as i64;
+        if pts.len() < 3 || pts[pts.len() - 1].0 - pts[0].0 < MIN_BLOCKS as i64 * block {
+            return None;
+        }
+        let one = |pick: &dyn Fn(&Point) -> (f64, f64, f64)| {
+            let n = pts.len() as f64;
+            let (mu, mv) = match centering {
+                Centering::MeanRemoved => (
+                    pts.iter().map(|p| pick(p).0).sum::<f64>() / n,
+                    pts.iter().map(|p| pick(p).1).sum::<f64>() / n,
+                ),
+                Centering::Raw => (0.0, 0.0),
+            };
+            let suu: f64 = pts.iter().map(|p| (pick(p).0 - mu).powi(2)).sum();
+            let suv: f64 = pts
+                .iter()
+                .map(|p| (pick(p).0 - mu) * (pick(p).1 - mv))
+                .sum();
+            let sdd: f64 = pts.iter().map(|p| pick(p).2.powi(2)).sum();
+            let gain = suv / suu;
+            let mut sums = vec![0.0; ((pts[pts.len() - 1].0 - pts[0].0) / block + 1) as usize];
+            for p in &pts {
+                let (u, v, d) = pick(p);
+                sums[((p.0 - pts[0].0) / block) as usize] += d * ((v - mv) - gain * (u - mu));
+            }
+            sums.iter().map(|s| s * s).sum::<f64>().sqrt() / (gain.abs() * sdd)
+        };
+        Some(one(&|p| (p.1, p.2, p.3)).max(one(&|p| (p.2, p.1, p.4))))
+    }
+
+    /// The one-pass sums give the two-pass definition's σ, both centerings, with gaps, an offset and
+    /// irregular samples on both sides.
+    #[test]
+    fn one_pass_matches_the_two_pass_definition() {
+        let signal =
+            |t: f64| 1.5 + (0.37 * t).sin() + 0.4 * (1.3 * t).sin() + 0.2 * (0.05 * t).cos();
+        let rt: Vec<f64> = (0..9000)
+            .map(|i| i as f64 * 0.1 + 0.003 * (i as f64 * 0.7).sin())
+            .filter(|t| !(300.0..320.0).contains(t))
+            .collect();
+        let rv: Vec<f64> = rt
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| signal(t) + 0.01 * ((i * 7919 % 13) as f64 - 6.0))
+            .collect();
+        let et: Vec<f64> = (0..180_000).map(|i| 5.0 + i as f64 * 0.005).collect();
+        let offset = 0.237;
+        let ev: Vec<f64> = et.iter().map(|&t| signal(t + offset)).collect();
+        for centering in [Centering::Raw, Centering::MeanRemoved] {
+            let got = offset_sigma((&rt, &rv), (&et, &ev), offset, 0.02, 0.5, centering).unwrap();
+            let want = two_pass((&rt, &rv), (&et, &ev), offset, 0.02, 0.5, centering).unwrap();
+            assert!(
+                (got - want).abs() <= 1e-9 * want,
+                "{centering:?}: {got} vs {want}"
+            );
+        }
     }
 
     #[test]

@@ -13,9 +13,64 @@ use crate::align::speed::speed_profile_each;
 use crate::align::time_offset::{OffsetMethod, OffsetParams};
 use crate::error::{Error, Result};
 
-/// Times, values and (speed only; empty otherwise) heading rates of one trajectory's signal for
-/// `method`.
-pub type Signal = (Vec<f64>, Vec<f64>, Vec<f64>);
+/// One trajectory's signal for a method: times, values and (speed only) heading rates.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Signal {
+    /// Sample times, seconds; shared by the unsigned and the signed curvature (one signature).
+    pub t: Arc<Vec<f64>>,
+    /// Values: curvature (1/m), signed curvature or speed (m/s).
+    pub v: Vec<f64>,
+    /// Heading rates, rad/s (speed only; empty otherwise).
+    pub yaw_rate: Vec<f64>,
+}
+
+/// A signal's times and values as the offset profile and the clock model read them: the estimate's
+/// speed is corrected for a lateral lever arm d (v + d·ω) where it is read, so no corrected copy of
+/// the whole signal is made.
+#[derive(Debug, Clone, Copy)]
+pub struct SignalView<'a> {
+    /// Sample times, seconds.
+    pub t: &'a [f64],
+    v: &'a [f64],
+    yaw_rate: &'a [f64],
+    lever_m: Option<f64>,
+}
+
+impl<'a> SignalView<'a> {
+    /// The signal as it is.
+    pub fn of(s: &'a Signal) -> Self {
+        SignalView {
+            t: &s.t,
+            v: &s.v,
+            yaw_rate: &s.yaw_rate,
+            lever_m: None,
+        }
+    }
+
+    /// The speed signal `s` with a lateral lever arm of `lever_m` metres taken out.
+    pub fn with_lever(s: &'a Signal, lever_m: f64) -> Self {
+        SignalView {
+            lever_m: Some(lever_m),
+            ..Self::of(s)
+        }
+    }
+
+    /// Value `i`.
+    pub fn value(&self, i: usize) -> f64 {
+        match self.lever_m {
+            Some(d) => self.v[i] + d * self.yaw_rate[i],
+            None => self.v[i],
+        }
+    }
+
+    /// The values of `range`, borrowed when nothing is corrected.
+    pub fn values(&self, range: std::ops::Range<usize>) -> std::borrow::Cow<'a, [f64]> {
+        match self.lever_m {
+            Some(_) => range.map(|i| self.value(i)).collect(),
+            None => std::borrow::Cow::Borrowed(&self.v[range]),
+        }
+    }
+}
 
 /// The reference's and the estimate's signal, shared.
 pub type SignalPair = (Arc<Signal>, Arc<Signal>);
@@ -29,20 +84,24 @@ fn speed_signal(t: &[f64], p: &[Vector3<f64>], params: &OffsetParams) -> Signal 
     let noise = isotropic_noise(t, p).unwrap_or(0.0);
     // At most one value a sample: reserved once (no doubling, no slack).
     let n = t.len();
-    let mut s: Signal = (
+    let (mut times, mut v, mut yaw_rate) = (
         Vec::with_capacity(n),
         Vec::with_capacity(n),
         Vec::with_capacity(n),
     );
-    speed_profile_each(t, p, params.speed_window_s, gap, noise, |v| {
-        s.0.push(v.t);
-        s.1.push(v.speed);
-        s.2.push(v.yaw_rate);
+    speed_profile_each(t, p, params.speed_window_s, gap, noise, |s| {
+        times.push(s.t);
+        v.push(s.speed);
+        yaw_rate.push(s.yaw_rate);
     });
-    s.0.shrink_to_fit();
-    s.1.shrink_to_fit();
-    s.2.shrink_to_fit();
-    s
+    times.shrink_to_fit();
+    v.shrink_to_fit();
+    yaw_rate.shrink_to_fit();
+    Signal {
+        t: Arc::new(times),
+        v,
+        yaw_rate,
+    }
 }
 
 /// The two trajectories of one evaluation (times from a common origin, the estimate's on its own
@@ -108,14 +167,18 @@ impl<'a> Pair<'a> {
                 u.push(c.curvature);
                 sv.push(c.signed_curvature());
             });
-            let ts = tu.clone();
             tu.shrink_to_fit();
             u.shrink_to_fit();
             sv.shrink_to_fit();
-            (
-                Arc::new((tu, u, Vec::new())),
-                Arc::new((ts, sv, Vec::new())),
-            )
+            let t = Arc::new(tu);
+            let signal = |v| {
+                Arc::new(Signal {
+                    t: t.clone(),
+                    v,
+                    yaw_rate: Vec::new(),
+                })
+            };
+            (signal(u), signal(sv))
         });
         if method == OffsetMethod::Curvature {
             unsigned.clone()
@@ -127,10 +190,10 @@ impl<'a> Pair<'a> {
 
 /// `s` when it holds at least 3 samples.
 fn checked(s: &Signal, method: OffsetMethod, what: &str) -> Result<()> {
-    if s.0.len() < 3 {
+    if s.t.len() < 3 {
         return Err(Error::TooFewSamples {
             what: format!("{what} {} signal", method.as_str()),
-            n: s.0.len(),
+            n: s.t.len(),
             need: 3,
         });
     }

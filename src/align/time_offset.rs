@@ -8,7 +8,8 @@
 //! t_est + Δt on the reference clock.
 //!
 //! To keep buffers small on long missions the search runs in two stages: the whole ±max_offset on a
-//! coarse grid with FFTs ([`crate::align::xcorr::masked_ncc`]), then every fine step (1 ms) in a window
+//! coarse grid with FFTs over blocks of the grid ([`crate::align::xcorr::masked_ncc_blocks`]; neither
+//! grid is held whole, see [`crate::align::grid::LazyGrid`]), then every fine step (1 ms) in a window
 //! of ±2 coarse steps around the coarse peak, with the sums of the fine grid formed from prefix sums
 //! over runs of the sparser signal ([`crate::align::fine_sums`]: no full-length signal on the fine
 //! grid), and finally a parabola through the best fine lag and its neighbours for a sub-step offset.
@@ -37,10 +38,10 @@ use nalgebra::Vector3;
 
 use crate::align::curvature::CurvatureParams;
 use crate::align::fine_sums::fine_sums;
-use crate::align::grid::resample;
+use crate::align::grid::{GridBlocks, LazyGrid};
 use crate::align::offset_sigma::offset_sigma;
-pub use crate::align::signals::{Intervals, Pair, Signal, SignalCache, SignalPair};
-use crate::align::xcorr::{masked_ncc, Centering};
+pub use crate::align::signals::{Intervals, Pair, Signal, SignalCache, SignalPair, SignalView};
+use crate::align::xcorr::{masked_ncc_blocks, Centering};
 use crate::error::{Error, Result};
 
 /// Which signal the offset is estimated from.
@@ -69,6 +70,16 @@ impl OffsetMethod {
             OffsetMethod::Speed => "speed",
             OffsetMethod::SignedCurvature => "signed-curvature",
             OffsetMethod::Auto => "auto",
+        }
+    }
+
+    /// Whether the method's NCC removes the means over the overlap: signed curvature always, speed
+    /// when `params` say so, the paper's unsigned curvature never (eq. 2).
+    pub fn centering(&self, params: &OffsetParams) -> Centering {
+        match self {
+            OffsetMethod::Speed if params.speed_mean_removed => Centering::MeanRemoved,
+            OffsetMethod::SignedCurvature | OffsetMethod::Auto => Centering::MeanRemoved,
+            _ => Centering::Raw,
         }
     }
 }
@@ -219,7 +230,11 @@ pub fn estimate_time_offset_cached(
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
     let (r, e) = pair.signals(method, params)?;
     let (r, e) = (without(&r, ref_exclude), without(&e, est_exclude));
-    let ((rt, rv, rw), (et, ev, ew)) = (r.as_ref(), e.as_ref());
+    let (r, e) = (r.as_ref(), e.as_ref());
+    let ((rt, rv, rw), (et, ev, ew)) = (
+        (&r.t[..], &r.v[..], &r.yaw_rate[..]),
+        (&e.t[..], &e.v[..], &e.yaw_rate[..]),
+    );
     let first = search_signals(method, (rt, rv), (et, ev), params)?;
     if method != OffsetMethod::Speed {
         return Ok(first);
@@ -239,11 +254,7 @@ pub fn estimate_time_offset_cached(
                     _ => return Ok(first),
                 }
             }
-            let centering = if params.speed_mean_removed {
-                Centering::MeanRemoved
-            } else {
-                Centering::Raw
-            };
+            let centering = method.centering(params);
             let h = params.coarse_grid_s;
             Ok(OffsetEstimate {
                 offset_s: offset,
@@ -255,31 +266,24 @@ pub fn estimate_time_offset_cached(
     }
 }
 
-/// Both trajectories' signals for `method`, the estimate's speed freed of a lateral lever arm
-/// measured at `offset_s` (what [`estimate_time_offset`] found): the offset profile correlates
-/// windows of these. Taken from `pair`'s cache when the search computed them.
+/// Both trajectories' signals for `method`, and the lateral lever arm (metres) to take out of the
+/// estimate's speed, measured at `offset_s` (what [`estimate_time_offset`] found): the offset profile
+/// correlates windows of these. Taken from `pair`'s cache when the search computed them.
 pub fn prepared_signals(
     method: OffsetMethod,
     pair: &Pair<'_>,
     params: &OffsetParams,
     offset_s: f64,
-) -> Result<SignalPair> {
+) -> Result<(SignalPair, Option<f64>)> {
     check_params(params)?;
-    let (r, mut e) = pair.signals(method, params)?;
+    let (r, e) = pair.signals(method, params)?;
+    let mut lever = None;
     if method == OffsetMethod::Speed {
         let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
-        if let Some(lever) =
-            lateral_lever_from_speed((&r.0, &r.1, &r.2), (&e.0, &e.1), offset_s, gap)
-                .filter(|l| l.abs() >= MIN_SPEED_LEVER_M)
-        {
-            let mut corrected = Signal::clone(&e);
-            for (v, w) in corrected.1.iter_mut().zip(&corrected.2) {
-                *v += lever * w;
-            }
-            e = Arc::new(corrected);
-        }
+        lever = lateral_lever_from_speed((&r.t, &r.v, &r.yaw_rate), (&e.t, &e.v), offset_s, gap)
+            .filter(|l| l.abs() >= MIN_SPEED_LEVER_M);
     }
-    Ok((r, e))
+    Ok(((r, e), lever))
 }
 
 /// The search of one method over two signals already computed (times, values), `est` on the
@@ -300,13 +304,15 @@ pub fn search_signals(
             });
         }
     }
-    let centering = match method {
-        OffsetMethod::Speed if params.speed_mean_removed => Centering::MeanRemoved,
-        OffsetMethod::SignedCurvature | OffsetMethod::Auto => Centering::MeanRemoved,
-        _ => Centering::Raw,
-    };
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
-    search(method, reference, estimate, params, centering, gap)
+    search(
+        method,
+        reference,
+        estimate,
+        params,
+        method.centering(params),
+        gap,
+    )
 }
 
 /// A lateral lever arm below this (metres) is left in the speed (it moves Δt by well under 5 ms).
@@ -453,23 +459,16 @@ fn search(
     };
     // Coarse stage: lag k pairs est grid point n with ref grid point n + k, i.e. Δt = k·h.
     let h = params.coarse_grid_s;
-    let e = resample(et, ev, h, gap);
-    let r = resample(rt, rv, h, gap);
+    // Both grids are read a block at a time, never held whole.
+    let e = LazyGrid::new(et, ev, h, gap);
+    let r = LazyGrid::new(rt, rv, h, gap);
     let (e_def, r_def) = (e.defined_count(), r.defined_count());
     if e_def < 3 || r_def < 3 {
         return Err(no_overlap());
     }
     let k_max = (params.max_offset_s / h).floor() as i64;
     let shift = e.first_index - r.first_index; // array lag = k + shift
-    let coarse = masked_ncc(
-        &e.values,
-        &e.mask,
-        &r.values,
-        &r.mask,
-        -k_max + shift,
-        k_max + shift,
-        centering,
-    );
+    let coarse = masked_ncc_blocks(&e, &r, -k_max + shift, k_max + shift, centering);
     let best_overlap = coarse.overlap.iter().copied().max().unwrap_or(0);
     if best_overlap < 3 {
         return Err(no_overlap());
@@ -557,8 +556,8 @@ fn without<'s>(s: &'s Signal, exclude: &[(f64, f64)]) -> std::borrow::Cow<'s, Si
     if exclude.is_empty() {
         return std::borrow::Cow::Borrowed(s);
     }
-    let kept: Vec<usize> = (0..s.0.len())
-        .filter(|&i| !exclude.iter().any(|&(a, b)| s.0[i] >= a && s.0[i] <= b))
+    let kept: Vec<usize> = (0..s.t.len())
+        .filter(|&i| !exclude.iter().any(|&(a, b)| s.t[i] >= a && s.t[i] <= b))
         .collect();
     // The heading rates are empty for the curvature methods: they stay empty.
     let pick = |v: &[f64]| -> Vec<f64> {
@@ -568,7 +567,11 @@ fn without<'s>(s: &'s Signal, exclude: &[(f64, f64)]) -> std::borrow::Cow<'s, Si
             kept.iter().map(|&i| v[i]).collect()
         }
     };
-    std::borrow::Cow::Owned((pick(&s.0), pick(&s.1), pick(&s.2)))
+    std::borrow::Cow::Owned(Signal {
+        t: Arc::new(pick(&s.t)),
+        v: pick(&s.v),
+        yaw_rate: pick(&s.yaw_rate),
+    })
 }
 
 fn check_params(p: &OffsetParams) -> Result<()> {

@@ -7,11 +7,17 @@
 //! * mean-removed (Pearson): the same after subtracting each signal's mean *over that overlap*.
 //!
 //! Every sum over the overlap is a correlation of two zero-padded sequences (a·mask_a against b,
-//! a² against mask_b, mask_a against mask_b, …), so all lags cost a handful of FFTs (`rustfft`)
-//! instead of O(N·K). [`masked_ncc_direct`] is the O(N·K) definition, used for short lag windows and
-//! to test the FFT path.
+//! a² against mask_b, mask_a against mask_b, …), so all lags cost a handful of FFTs (`realfft`, on
+//! `rustfft`) instead of O(N·K). The correlation runs block by block (overlap-add): a block of a
+//! against the stretch of b its lags reach, with FFTs of about four times the lags. On a 2-hour
+//! mission the coarse search's ±30 s are 3001 lags over 360,000 grid points: one transform over the
+//! whole grid takes 2¹⁹-point buffers (4 MB a spectrum, several at once), the blocks 2¹⁴-point ones,
+//! and read the grid as they go ([`crate::align::grid::GridBlocks`]). [`masked_ncc_direct`] is the O(N·K) definition, used for
+//! short lag windows and to test the FFT path.
 
 use realfft::RealFftPlanner;
+
+use crate::align::grid::{GridBlocks, MaskedSlices};
 use rustfft::num_complex::Complex;
 
 /// Whether the NCC subtracts each signal's mean over the overlap first.
@@ -104,8 +110,29 @@ pub fn masked_ncc(
     lag_max: i64,
     centering: Centering,
 ) -> MaskedNcc {
-    let na = a.len().min(mask_a.len());
-    let nb = b.len().min(mask_b.len());
+    let a = MaskedSlices {
+        values: a,
+        mask: mask_a,
+    };
+    let b = MaskedSlices {
+        values: b,
+        mask: mask_b,
+    };
+    masked_ncc_blocks(&a, &b, lag_min, lag_max, centering)
+}
+
+/// [`masked_ncc`] of two signals read a block at a time (overlap-add): `a` is cut into blocks, each
+/// correlated by FFT with the stretch of `b` its lags reach. Memory is a few FFT buffers of about
+/// four times the number of lags, whatever the signals' length, and the work is that of one FFT over
+/// the whole signal.
+pub fn masked_ncc_blocks(
+    a: &impl GridBlocks,
+    b: &impl GridBlocks,
+    lag_min: i64,
+    lag_max: i64,
+    centering: Centering,
+) -> MaskedNcc {
+    let (na, nb) = (a.len() as i64, b.len() as i64);
     let lags = if lag_max >= lag_min {
         (lag_max - lag_min + 1) as usize
     } else {
@@ -116,79 +143,142 @@ pub fn masked_ncc(
         ncc: vec![0.0; lags],
         overlap: vec![0; lags],
     };
-    if na == 0 || nb == 0 || lags == 0 {
+    // Only lags in (−na, nb) have an overlap.
+    let (k0, k1) = (lag_min.max(1 - na), lag_max.min(nb - 1));
+    if na == 0 || nb == 0 || k1 < k0 {
         return out;
     }
-    // Circular correlation equals the linear one at every |k| ≤ K once len ≥ max(na, nb) + K (no
-    // product wraps around onto a non-zero sample); lags beyond (−na, nb) have no overlap anyway.
-    let k_abs = lag_min.unsigned_abs().max(lag_max.unsigned_abs()) as usize;
-    let len = (na.max(nb) + k_abs.min(na.max(nb))).next_power_of_two();
-    // Real-input FFTs (`realfft`): a spectrum is len/2 + 1 bins, half a complex transform's.
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fwd = planner.plan_fft_forward(len);
-    let inv = planner.plan_fft_inverse(len);
-    let spectrum = |x: &dyn Fn(usize) -> f64, n: usize| -> Vec<Complex<f64>> {
-        let mut input = fwd.make_input_vec();
-        for (j, v) in input.iter_mut().enumerate().take(n) {
-            *v = x(j);
+    let sums = BlockCorrelator::new((k1 - k0 + 1) as usize, na as usize, centering).run(a, b, k0);
+    for (j, s) in sums.iter().enumerate() {
+        let i = (k0 - lag_min) as usize + j;
+        out.overlap[i] = s.n as usize;
+        out.ncc[i] = s.ncc(centering);
+    }
+    out
+}
+
+/// The FFT plans and buffers of a blocked correlation: blocks of `block` points of a against
+/// stretches of `len` = `block` + lags − 1 points of b (a circular correlation of length `len` then
+/// equals the linear one at every searched lag).
+struct BlockCorrelator {
+    lags: usize,
+    block: usize,
+    len: usize,
+    centering: Centering,
+    fwd: std::sync::Arc<dyn realfft::RealToComplex<f64>>,
+    inv: std::sync::Arc<dyn realfft::ComplexToReal<f64>>,
+}
+
+/// The smallest FFT length of a blocked correlation (below it, per-block overheads dominate).
+const MIN_BLOCK_FFT: usize = 1024;
+
+impl BlockCorrelator {
+    fn new(lags: usize, na: usize, centering: Centering) -> Self {
+        // About four times the lags: three quarters of each transform is new signal, and a short
+        // signal gets one transform of its own length.
+        let len = (4 * lags)
+            .next_power_of_two()
+            .max(MIN_BLOCK_FFT)
+            .min((na + lags - 1).next_power_of_two());
+        let mut planner = RealFftPlanner::<f64>::new();
+        BlockCorrelator {
+            lags,
+            block: len + 1 - lags,
+            len,
+            centering,
+            fwd: planner.plan_fft_forward(len),
+            inv: planner.plan_fft_inverse(len),
         }
-        let mut out = fwd.make_output_vec();
+    }
+
+    /// The overlap sums at lags `k0`, `k0 + 1`, … (`lags` of them), block by block.
+    fn run(&self, a: &impl GridBlocks, b: &impl GridBlocks, k0: i64) -> Vec<OverlapSums> {
+        let mut acc = vec![OverlapSums::default(); self.lags];
+        let (mut av, mut am) = (vec![0.0; self.block], vec![0.0; self.block]);
+        let (mut bv, mut bm) = (vec![0.0; self.len], vec![0.0; self.len]);
+        for start in (0..a.len()).step_by(self.block) {
+            let n = self.block.min(a.len() - start);
+            a.read(start as i64, &mut av[..n], &mut am[..n]);
+            if am[..n].iter().all(|&m| m < 0.5) {
+                continue;
+            }
+            b.read(start as i64 + k0, &mut bv, &mut bm);
+            if bm.iter().all(|&m| m < 0.5) {
+                continue;
+            }
+            self.add_block((&av[..n], &am[..n]), (&bv, &bm), &mut acc);
+        }
+        for s in &mut acc {
+            s.n = s.n.round().max(0.0);
+            s.saa = s.saa.max(0.0);
+            s.sbb = s.sbb.max(0.0);
+        }
+        acc
+    }
+
+    /// Adds one block's sums: c[k] = Σ_i x[i]·y[i + k] = IFFT(conj(X)·Y)[k] for every product.
+    fn add_block(
+        &self,
+        (av, am): (&[f64], &[f64]),
+        (bv, bm): (&[f64], &[f64]),
+        acc: &mut [OverlapSums],
+    ) {
+        let squares = |v: &[f64]| v.iter().map(|x| x * x).collect::<Vec<f64>>();
+        let (fa, fma, faa) = (
+            self.spectrum(av),
+            self.spectrum(am),
+            self.spectrum(&squares(av)),
+        );
+        let (fb, fmb, fbb) = (
+            self.spectrum(bv),
+            self.spectrum(bm),
+            self.spectrum(&squares(bv)),
+        );
+        let mut add =
+            |x: &[Complex<f64>], y: &[Complex<f64>], field: fn(&mut OverlapSums) -> &mut f64| {
+                let c = self.correlate(x, y);
+                for (s, v) in acc.iter_mut().zip(c) {
+                    *field(s) += v;
+                }
+            };
+        add(&fa, &fb, |s| &mut s.sab);
+        add(&fma, &fmb, |s| &mut s.n);
+        add(&faa, &fmb, |s| &mut s.saa);
+        add(&fma, &fbb, |s| &mut s.sbb);
+        if self.centering == Centering::MeanRemoved {
+            add(&fa, &fmb, |s| &mut s.sa);
+            add(&fma, &fb, |s| &mut s.sb);
+        }
+    }
+
+    /// The real FFT of `x` zero-padded to the transform's length.
+    fn spectrum(&self, x: &[f64]) -> Vec<Complex<f64>> {
+        let mut input = self.fwd.make_input_vec();
+        input[..x.len()].copy_from_slice(x);
+        let mut out = self.fwd.make_output_vec();
         // Lengths come from the planner's own buffers: the transform cannot fail.
-        fwd.process(&mut input, &mut out)
+        self.fwd
+            .process(&mut input, &mut out)
             .expect("realfft buffers of the planned length");
         out
-    };
-    let ma = |j: usize| if mask_a[j] > 0.5 { 1.0 } else { 0.0 };
-    let mb = |j: usize| if mask_b[j] > 0.5 { 1.0 } else { 0.0 };
-    let av = |j: usize| if mask_a[j] > 0.5 { a[j] } else { 0.0 };
-    let bv = |j: usize| if mask_b[j] > 0.5 { b[j] } else { 0.0 };
-    // Correlation c[k] = Σ_j x[j]·y[j+k] = IFFT(conj(X)·Y)[k mod len], real. Only the searched lags
-    // are kept, and each spectrum is dropped once no correlation needs it (a coarse search of a
-    // 2-hour mission holds four spectra of four megabytes each).
-    let corr = |x: &[Complex<f64>], y: &[Complex<f64>]| -> Vec<f64> {
+    }
+
+    /// The first `lags` entries of the circular correlation of two spectra.
+    fn correlate(&self, x: &[Complex<f64>], y: &[Complex<f64>]) -> Vec<f64> {
         let mut prod: Vec<Complex<f64>> = x.iter().zip(y).map(|(x, y)| x.conj() * y).collect();
         // Real signals: the DC and Nyquist bins are real (their rounding residue is dropped).
         let last = prod.len() - 1;
         prod[0].im = 0.0;
         prod[last].im = 0.0;
-        let mut out = inv.make_output_vec();
-        inv.process(&mut prod, &mut out)
+        let mut out = self.inv.make_output_vec();
+        self.inv
+            .process(&mut prod, &mut out)
             .expect("realfft buffers of the planned length");
-        let scale = 1.0 / len as f64;
-        (0..lags)
-            .map(|i| out[(lag_min + i as i64).rem_euclid(len as i64) as usize] * scale)
-            .collect()
-    };
-    let (f_a, f_ma) = (spectrum(&av, na), spectrum(&ma, na));
-    let (f_b, f_mb) = (spectrum(&bv, nb), spectrum(&mb, nb));
-    let sab = corr(&f_a, &f_b);
-    let count = corr(&f_ma, &f_mb);
-    let sa_sb = match centering {
-        Centering::MeanRemoved => Some((corr(&f_a, &f_mb), corr(&f_ma, &f_b))),
-        Centering::Raw => None,
-    };
-    drop((f_a, f_b));
-    let saa = corr(&spectrum(&|j| av(j) * av(j), na), &f_mb);
-    let sbb = corr(&f_ma, &spectrum(&|j| bv(j) * bv(j), nb));
-    for i in 0..lags {
-        let k = lag_min + i as i64;
-        if k <= -(na as i64) || k >= nb as i64 {
-            continue;
-        }
-        let n = count[i].round().max(0.0);
-        let (sa, sb) = sa_sb.as_ref().map_or((0.0, 0.0), |(a, b)| (a[i], b[i]));
-        let sums = OverlapSums {
-            n,
-            sa,
-            sb,
-            sab: sab[i],
-            saa: saa[i].max(0.0),
-            sbb: sbb[i].max(0.0),
-        };
-        out.overlap[i] = n as usize;
-        out.ncc[i] = sums.ncc(centering);
+        let scale = 1.0 / self.len as f64;
+        out.truncate(self.lags);
+        out.iter_mut().for_each(|v| *v *= scale);
+        out
     }
-    out
 }
 
 /// The overlap sums of `a[j]` and `b[j + lag]` by direct summation.

@@ -1,16 +1,13 @@
 //! The correlation curves of the offset search near its answer, recomputed for the figure: the report
-//! keeps each method's peak, not the curve. Built from the same public pieces the search uses
-//! (`curvature_signature`, `speed_profile`, `resample`, `masked_ncc`) on the coarse grid, so the curve
-//! is the one the search's coarse stage saw; the marked peak is the refined answer from the report.
+//! keeps each method's peak, not the curve. Built from the search's own pieces (the signals of
+//! [`Pair`], the coarse grid, `masked_ncc_blocks`), so the curve is the one the search's coarse stage
+//! saw; the marked peak is the refined answer from the report.
 
 use nalgebra::Vector3;
 
-use crate::align::auto_params::reference_noise;
-use crate::align::curvature::curvature_signature;
-use crate::align::grid::resample;
-use crate::align::speed::speed_profile;
-use crate::align::time_offset::{OffsetMethod, OffsetParams};
-use crate::align::xcorr::{masked_ncc, Centering};
+use crate::align::grid::LazyGrid;
+use crate::align::time_offset::{OffsetMethod, OffsetParams, Pair, SignalCache};
+use crate::align::xcorr::masked_ncc_blocks;
 
 /// One method's NCC against the offset Δt (seconds).
 #[derive(Debug, Clone, Default)]
@@ -19,35 +16,6 @@ pub struct CorrelationCurve {
     pub points: Vec<(f64, f64)>,
     /// The method's refined answer (Δt, peak NCC), from the report.
     pub peak: Option<(f64, f64)>,
-}
-
-/// The signal a method correlates, as (times, values); mirrors the search's choice per method.
-fn signal(
-    method: OffsetMethod,
-    t: &[f64],
-    p: &[Vector3<f64>],
-    params: &OffsetParams,
-) -> (Vec<f64>, Vec<f64>) {
-    let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
-    match method {
-        OffsetMethod::Curvature => curvature_signature(t, p, &params.curvature)
-            .into_iter()
-            .map(|s| (s.t, s.curvature))
-            .unzip(),
-        OffsetMethod::SignedCurvature | OffsetMethod::Auto => {
-            curvature_signature(t, p, &params.curvature)
-                .into_iter()
-                .map(|s| (s.t, s.signed_curvature()))
-                .unzip()
-        }
-        OffsetMethod::Speed => {
-            let noise = reference_noise(t, p).unwrap_or(0.0);
-            speed_profile(t, p, params.speed_window_s, gap, noise)
-                .into_iter()
-                .map(|s| (s.t, s.speed))
-                .unzip()
-        }
-    }
 }
 
 /// The NCC of `method` at Δt in `[center − half_width, center + half_width]` on the coarse grid.
@@ -64,32 +32,19 @@ pub fn correlation_curve(
     half_width_s: f64,
 ) -> Vec<(f64, f64)> {
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
-    let (rt, rv) = signal(method, ref_t, ref_p, params);
-    let (et, ev) = signal(method, est_t, est_p, params);
-    if rt.len() < 3 || et.len() < 3 {
+    let cache = SignalCache::default();
+    let pair = Pair::new((ref_t, ref_p), (est_t, est_p), &cache);
+    let Ok((r, e)) = pair.signals(method, params) else {
         return Vec::new();
-    }
-    let h = params.coarse_grid_s;
-    let e = resample(&et, &ev, h, gap);
-    let r = resample(&rt, &rv, h, gap);
-    let centering = match method {
-        OffsetMethod::Speed if params.speed_mean_removed => Centering::MeanRemoved,
-        OffsetMethod::SignedCurvature | OffsetMethod::Auto => Centering::MeanRemoved,
-        _ => Centering::Raw,
     };
+    let h = params.coarse_grid_s;
+    let e = LazyGrid::new(&e.t, &e.v, h, gap);
+    let r = LazyGrid::new(&r.t, &r.v, h, gap);
     // Lag k pairs estimate grid point n with reference grid point n + k: Δt = k·h.
     let shift = e.first_index - r.first_index;
     let k0 = ((center_s - half_width_s) / h).floor() as i64;
     let k1 = ((center_s + half_width_s) / h).ceil() as i64;
-    let ncc = masked_ncc(
-        &e.values,
-        &e.mask,
-        &r.values,
-        &r.mask,
-        k0 + shift,
-        k1 + shift,
-        centering,
-    );
+    let ncc = masked_ncc_blocks(&e, &r, k0 + shift, k1 + shift, method.centering(params));
     (0..ncc.len())
         .filter(|&i| ncc.overlap[i] >= 3)
         .map(|i| ((ncc.lag(i) - shift) as f64 * h, ncc.ncc[i]))
