@@ -1,6 +1,7 @@
 //! The command-line edge: argument definitions, one handler per command, progress display and exit
 //! codes. Results go to stdout, diagnostics to stderr.
 
+pub mod allocator;
 pub mod args;
 pub mod batch_progress;
 pub mod commands;
@@ -24,6 +25,7 @@ pub fn parse() -> args::Cli {
 
 /// Dispatches a parsed command line and maps the outcome to an exit code.
 pub fn run(cli: args::Cli) -> ExitCode {
+    allocator::return_large_blocks();
     let result = match cli.command {
         args::Command::Eval(a) => commands::eval::run(*a),
         args::Command::Topics(a) => commands::topics::run(a),
