@@ -336,3 +336,79 @@ fn attachments_metadata_and_lz4_survive_and_tum_estimates_become_poses() {
         .unwrap();
     assert_eq!(same.status.code(), Some(2));
 }
+
+/// Under a linear or piecewise clock model the aligned channel follows the model stamp by stamp: every
+/// aligned message moved (stamp, log and publish time) by one shift, the shifts not all equal, and
+/// every stamp `--export-aligned` wrote (what Drift Error saw) present on the channel.
+#[test]
+fn aligned_channel_follows_a_non_constant_clock_model() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    for (m, model) in [("clock_drift", "linear"), ("clock_step", "piecewise")] {
+        let input = common::mission(&shared, m).join("mission.mcap");
+        let (out, tum, json) = (
+            dir.path().join(format!("{m}.mcap")),
+            dir.path().join(format!("{m}.tum")),
+            dir.path().join(format!("{m}.json")),
+        );
+        let o = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+            .arg("eval")
+            .arg(&input)
+            .args(["--reference", "/reference/position"])
+            .args(["--estimate", "/estimate/odom", "--quiet", "--annotate"])
+            .arg(&out)
+            .arg("--export-aligned")
+            .arg(&tum)
+            .arg("--json")
+            .arg(&json)
+            .output()
+            .unwrap();
+        assert!(matches!(o.status.code(), Some(0 | 3)), "{m}: {o:?}");
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        assert_eq!(report["estimates"][0]["time_offset"]["model"], model, "{m}");
+
+        let (a, b) = (read(&input), read(&out));
+        let channel = |c: &Contents, topic: &str| {
+            c.channels
+                .iter()
+                .find(|(_, v)| v.0 == topic)
+                .map(|(id, _)| *id)
+                .unwrap()
+        };
+        let (src, dst) = (
+            channel(&a, "/estimate/odom"),
+            channel(&b, "/trajdrift/estimate/odom/aligned"),
+        );
+        // Input messages by their bytes after the stamp (unique: the pose differs sample to sample).
+        let originals: BTreeMap<&[u8], (i64, u64, u64)> = a
+            .messages
+            .iter()
+            .filter(|x| x.0 == src)
+            .map(|x| (&x.4[12..], (stamp_ns(&x.4), x.2, x.3)))
+            .collect();
+        let mut shifts = std::collections::BTreeSet::new();
+        let mut stamps = std::collections::BTreeSet::new();
+        for x in b.messages.iter().filter(|x| x.0 == dst) {
+            let (stamp, log, publish) = originals[&x.4[12..]];
+            let dt = stamp_ns(&x.4) - stamp;
+            assert_eq!(x.2 as i64 - log as i64, dt, "{m}: log time");
+            assert_eq!(x.3 as i64 - publish as i64, dt, "{m}: publish time");
+            shifts.insert(dt);
+            stamps.insert(stamp_ns(&x.4));
+        }
+        assert!(shifts.len() > 1, "{m}: one shift for every message");
+        let exported = std::fs::read_to_string(&tum).unwrap();
+        for line in exported.lines().filter(|l| !l.starts_with('#')) {
+            let t = line.split_whitespace().next().unwrap();
+            let (s, ns) = t.split_once('.').unwrap();
+            let stamp = s.parse::<i64>().unwrap() * 1_000_000_000 + ns.parse::<i64>().unwrap();
+            assert!(
+                stamps.contains(&stamp),
+                "{m}: exported stamp {t} not on the aligned channel"
+            );
+        }
+    }
+}

@@ -15,7 +15,8 @@
 //! time is then located on the signals themselves ([`locate_change`]), to a few seconds.
 //!
 //! Sign of the drift: `drift_ppm` is positive when the estimate's clock runs fast, so its Δt falls
-//! with time: Δt(t) = Δt(t_mid) − drift_ppm·10⁻⁶·(t − t_mid).
+//! with time: Δt(t) = Δt(t_mid) − drift_ppm·10⁻⁶·(t − t_mid). The chosen model is applied to the
+//! estimate's stamps from the report's numbers by [`crate::eval::clock`].
 
 use crate::align::offset_profile::{OffsetProfile, ProfileWindow, SIGMA_FLOOR_S};
 use crate::align::time_offset::{Pair, SignalView};
@@ -116,46 +117,6 @@ impl ClockModel {
             segments: Vec::new(),
             bic: [f64::NAN; 3],
             reason,
-        }
-    }
-
-    /// Δt at reference time `t`.
-    pub fn offset_at(&self, t: f64) -> f64 {
-        match self.model {
-            OffsetModel::Constant => self.offset_s,
-            OffsetModel::Linear => {
-                self.offset_s - self.drift_ppm.unwrap_or(0.0) * 1e-6 * (t - self.t_mid)
-            }
-            OffsetModel::Piecewise => {
-                let s = self
-                    .segments
-                    .iter()
-                    .find(|s| t < s.t_end)
-                    .or(self.segments.last());
-                s.map_or(self.offset_s, |s| s.offset_s)
-            }
-        }
-    }
-
-    /// An estimate stamp `t_est` (its own clock) on the reference clock; `None` when it falls in the
-    /// stretch a backward step of the clock repeated (a piecewise model maps it into no segment).
-    pub fn to_reference(&self, t_est: f64) -> Option<f64> {
-        match self.model {
-            OffsetModel::Constant => Some(t_est + self.offset_s),
-            OffsetModel::Linear => {
-                // One fixed-point step: Δt varies by ppm·10⁻⁶ of a second per second.
-                let t = t_est + self.offset_s;
-                Some(t_est + self.offset_at(t))
-            }
-            OffsetModel::Piecewise => {
-                let n = self.segments.len();
-                self.segments.iter().enumerate().find_map(|(i, s)| {
-                    let t = t_est + s.offset_s;
-                    let after_start = i == 0 || t >= s.t_start;
-                    let before_end = i + 1 == n || t < s.t_end;
-                    (after_start && before_end).then_some(t)
-                })
-            }
         }
     }
 }

@@ -7,8 +7,9 @@
 //! - `/trajdrift/<name>/drift_error`: one JSON message per Drift Error window, log time = window end.
 //! - `/trajdrift/<name>/curvature`, `/trajdrift/reference/curvature`: the curvature signatures, JSON.
 //!
-//! Shifts are integer nanoseconds: Δt_ns = round(applied_s × 10⁹), added exactly to the header stamp,
-//! the log time and the publish time.
+//! Shifts are integer nanoseconds, added exactly to the header stamp, the log time and the publish
+//! time: Δt_ns = round(applied_s × 10⁹), or per stamp the report's linear or piecewise clock model
+//! ([`crate::eval::clock`]), as Drift Error and `--export-aligned` applied it.
 
 use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::io::{Seek, Write};
@@ -24,6 +25,7 @@ use crate::decode::cdr::encode_le;
 use crate::decode::ros2_msgs::{Header, Point, Pose, PoseStamped, Quaternion, Time};
 use crate::decode::ros2_schemas::schema_text;
 use crate::error::{Error, Result};
+use crate::eval::clock::ClockCorrection;
 use crate::report::json::Report;
 use crate::trajectory::Trajectory;
 
@@ -36,11 +38,6 @@ const POSE_STAMPED: &str = "geometry_msgs/msg/PoseStamped";
 /// Topic of a new channel: `/trajdrift/<name>/<what>`.
 pub fn topic(name: &str, what: &str) -> String {
     format!("/trajdrift/{name}/{what}")
-}
-
-/// Nanoseconds of an offset in seconds, as applied everywhere: round(s × 10⁹).
-pub fn offset_ns(seconds: f64) -> i64 {
-    (seconds * 1e9).round() as i64
 }
 
 /// One Drift Error window as written on `/trajdrift/<name>/drift_error`.
@@ -77,7 +74,8 @@ pub enum AlignedSource {
 #[derive(Debug, Clone)]
 pub struct EstimatePlan {
     pub name: String,
-    pub dt_ns: i64,
+    /// The report's clock correction of the estimate's stamps.
+    pub shift: ClockCorrection,
     pub aligned: AlignedSource,
     /// The curvature signature on the reference clock: (log time ns, message).
     pub curvature: Vec<(u64, CurvatureMessage)>,
@@ -110,8 +108,8 @@ pub struct Annotator {
     schema_ids: [u16; 3],
     /// Channel ids: reference curvature, then per estimate aligned, drift_error, curvature.
     channel_ids: Vec<u16>,
-    /// Input topic → (estimate index, Δt ns), for patched aligned channels.
-    patch: HashMap<String, (usize, i64)>,
+    /// Input topic → estimate index, for patched aligned channels.
+    patch: HashMap<String, usize>,
     /// Estimates whose aligned channel exists already.
     aligned_added: Vec<bool>,
     pending: VecDeque<Pending>,
@@ -141,7 +139,7 @@ impl Annotator {
             .iter()
             .enumerate()
             .filter_map(|(i, e)| match &e.aligned {
-                AlignedSource::PatchTopic(t) => Some((t.clone(), (i, e.dt_ns))),
+                AlignedSource::PatchTopic(t) => Some((t.clone(), i)),
                 AlignedSource::Generate(_) => None,
             })
             .collect();
@@ -353,7 +351,18 @@ impl<W: Write + Seek> Annotations<W> for Annotator {
         data: &[u8],
     ) -> Result<()> {
         self.flush(w, Some(header.log_time))?;
-        let Some(&(i, dt_ns)) = self.patch.get(&channel.topic) else {
+        let Some(&i) = self.patch.get(&channel.topic) else {
+            return Ok(());
+        };
+        let decode_error = |detail| Error::Decode {
+            path: self.output.clone(),
+            topic: channel.topic.clone(),
+            index: u64::from(header.sequence),
+            detail,
+        };
+        let stamp = header_stamp(&channel.message_encoding, data).map_err(decode_error)?;
+        // A stamp the clock model maps nowhere (repeated by a backward step) has no aligned copy.
+        let Some(dt_ns) = self.plan.estimates[i].shift.stamp(stamp).map(|s| s - stamp) else {
             return Ok(());
         };
         let aligned = self.channel_ids[1 + 3 * i];
@@ -369,14 +378,7 @@ impl<W: Write + Seek> Annotations<W> for Annotator {
             .map_err(|e| self.err(e))?;
             self.aligned_added[i] = true;
         }
-        let patched = shift_stamp(&channel.message_encoding, data, dt_ns).map_err(|detail| {
-            Error::Decode {
-                path: self.output.clone(),
-                topic: channel.topic.clone(),
-                index: u64::from(header.sequence),
-                detail,
-            }
-        })?;
+        let patched = shift_stamp(&channel.message_encoding, data, dt_ns).map_err(decode_error)?;
         let shift = |t: u64| -> Result<u64> {
             t.checked_add_signed(dt_ns).ok_or_else(|| Error::Output {
                 path: self.output.clone(),
@@ -412,88 +414,98 @@ impl<W: Write + Seek> Annotations<W> for Annotator {
     }
 }
 
-/// Shifts the header stamp of a stamped message by `dt_ns` in its own encoding: `cdr` (ROS 2) or `ros1`.
+/// Where a stamped message keeps its header stamp: bytes 4–12, after a ROS 1 `std_msgs/Header`'s
+/// `uint32 seq` (`uint32 secs, uint32 nsecs`, little endian, no encapsulation header) or after a CDR
+/// encapsulation header (`int32 sec, uint32 nanosec` in the payload's byte order; plain CDR only).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum StampLayout {
+    Ros1,
+    Cdr { little: bool },
+}
+
+impl StampLayout {
+    /// The layout of `data` in `encoding`, checked against its length and encapsulation.
+    fn of(encoding: &str, data: &[u8]) -> std::result::Result<Self, String> {
+        let too_short = |what: &str| Err(format!("{} bytes, too short for {what}", data.len()));
+        match encoding {
+            "ros1" if data.len() < 12 => too_short("a stamped ROS 1 message"),
+            "ros1" => Ok(StampLayout::Ros1),
+            "cdr" if data.len() < 12 => too_short("a stamped message"),
+            "cdr" => match (data[0], data[1]) {
+                (0, 1) => Ok(StampLayout::Cdr { little: true }),
+                (0, 0) => Ok(StampLayout::Cdr { little: false }),
+                (a, b) => Err(format!("encapsulation 0x{a:02x}{b:02x} is not plain CDR")),
+            },
+            other => Err(format!(
+                "message encoding `{other}`: trajdrift patches stamps of `cdr` and `ros1` messages only"
+            )),
+        }
+    }
+
+    fn read(self, data: &[u8]) -> i64 {
+        let word = |at: usize| [data[at], data[at + 1], data[at + 2], data[at + 3]];
+        let (sec, nanosec) = match self {
+            StampLayout::Ros1 => (
+                i64::from(u32::from_le_bytes(word(4))),
+                u32::from_le_bytes(word(8)),
+            ),
+            StampLayout::Cdr { little: true } => (
+                i64::from(i32::from_le_bytes(word(4))),
+                u32::from_le_bytes(word(8)),
+            ),
+            StampLayout::Cdr { little: false } => (
+                i64::from(i32::from_be_bytes(word(4))),
+                u32::from_be_bytes(word(8)),
+            ),
+        };
+        sec * 1_000_000_000 + i64::from(nanosec)
+    }
+
+    /// `data` with the stamp `ns` written in, in a copy.
+    fn write(self, data: &[u8], ns: i64) -> std::result::Result<Vec<u8>, String> {
+        let (sec, nanosec) = (
+            ns.div_euclid(1_000_000_000),
+            ns.rem_euclid(1_000_000_000) as u32,
+        );
+        let sec: [u8; 4] = match self {
+            StampLayout::Ros1 => u32::try_from(sec)
+                .map_err(|_| format!("stamp {ns} ns shifted out of the uint32 seconds range"))?
+                .to_le_bytes(),
+            StampLayout::Cdr { little } => {
+                let s = i32::try_from(sec)
+                    .map_err(|_| format!("stamp {ns} ns shifted out of the int32 seconds range"))?;
+                if little {
+                    s.to_le_bytes()
+                } else {
+                    s.to_be_bytes()
+                }
+            }
+        };
+        let nanosec = match self {
+            StampLayout::Cdr { little: false } => nanosec.to_be_bytes(),
+            _ => nanosec.to_le_bytes(),
+        };
+        let mut out = data.to_vec();
+        out[4..8].copy_from_slice(&sec);
+        out[8..12].copy_from_slice(&nanosec);
+        Ok(out)
+    }
+}
+
+/// The header stamp (ns) of a stamped message in its own encoding: `cdr` (ROS 2) or `ros1`.
+pub fn header_stamp(encoding: &str, data: &[u8]) -> std::result::Result<i64, String> {
+    Ok(StampLayout::of(encoding, data)?.read(data))
+}
+
+/// Shifts the header stamp of a stamped message by `dt_ns` in its own encoding, in a copy: everything
+/// else stays byte-identical.
 pub fn shift_stamp(
     encoding: &str,
     data: &[u8],
     dt_ns: i64,
 ) -> std::result::Result<Vec<u8>, String> {
-    match encoding {
-        "cdr" => shift_header_stamp(data, dt_ns),
-        "ros1" => shift_ros1_header_stamp(data, dt_ns),
-        other => Err(format!(
-            "message encoding `{other}`: trajdrift patches stamps of `cdr` and `ros1` messages only"
-        )),
-    }
-}
-
-/// Shifts the header stamp of a ROS 1 stamped message by `dt_ns`, in a copy: a ROS 1 `std_msgs/Header`
-/// starts with `uint32 seq, uint32 secs, uint32 nsecs`, little endian, with no encapsulation header.
-pub fn shift_ros1_header_stamp(data: &[u8], dt_ns: i64) -> std::result::Result<Vec<u8>, String> {
-    if data.len() < 12 {
-        return Err(format!(
-            "{} bytes, too short for a stamped ROS 1 message",
-            data.len()
-        ));
-    }
-    let word = |at: usize| u32::from_le_bytes([data[at], data[at + 1], data[at + 2], data[at + 3]]);
-    let stamp = i64::from(word(4)) * 1_000_000_000 + i64::from(word(8)) + dt_ns;
-    let secs = u32::try_from(stamp.div_euclid(1_000_000_000))
-        .map_err(|_| format!("stamp {stamp} ns shifted out of the uint32 seconds range"))?;
-    let nsecs = stamp.rem_euclid(1_000_000_000) as u32;
-    let mut out = data.to_vec();
-    out[4..8].copy_from_slice(&secs.to_le_bytes());
-    out[8..12].copy_from_slice(&nsecs.to_le_bytes());
-    Ok(out)
-}
-
-/// Shifts the header stamp of a CDR-encoded stamped ROS 2 message by `dt_ns`, in place of a copy:
-/// after the 4-byte encapsulation header come `int32 sec, uint32 nanosec` in the payload's byte order.
-/// Only plain CDR (big or little endian) is accepted.
-pub fn shift_header_stamp(data: &[u8], dt_ns: i64) -> std::result::Result<Vec<u8>, String> {
-    if data.len() < 12 {
-        return Err(format!(
-            "{} bytes, too short for a stamped message",
-            data.len()
-        ));
-    }
-    let little = match (data[0], data[1]) {
-        (0, 1) => true,
-        (0, 0) => false,
-        (a, b) => return Err(format!("encapsulation 0x{a:02x}{b:02x} is not plain CDR")),
-    };
-    let field = |r: std::ops::Range<usize>| -> [u8; 4] {
-        let mut b = [0u8; 4];
-        b.copy_from_slice(&data[r]);
-        b
-    };
-    let (sec, nanosec) = if little {
-        (
-            i32::from_le_bytes(field(4..8)),
-            u32::from_le_bytes(field(8..12)),
-        )
-    } else {
-        (
-            i32::from_be_bytes(field(4..8)),
-            u32::from_be_bytes(field(8..12)),
-        )
-    };
-    let stamp = Time { sec, nanosec }.to_ns() + dt_ns;
-    if i32::try_from(stamp.div_euclid(1_000_000_000)).is_err() {
-        return Err(format!(
-            "stamp {stamp} ns shifted out of the int32 seconds range"
-        ));
-    }
-    let t = Time::from_ns(stamp);
-    let mut out = data.to_vec();
-    let (s, n) = if little {
-        (t.sec.to_le_bytes(), t.nanosec.to_le_bytes())
-    } else {
-        (t.sec.to_be_bytes(), t.nanosec.to_be_bytes())
-    };
-    out[4..8].copy_from_slice(&s);
-    out[8..12].copy_from_slice(&n);
-    Ok(out)
+    let layout = StampLayout::of(encoding, data)?;
+    layout.write(data, layout.read(data) + dt_ns)
 }
 
 #[cfg(test)]
@@ -515,7 +527,7 @@ mod tests {
                 data.extend(ns.to_be_bytes());
             }
             data.extend(&tail);
-            let out = shift_header_stamp(&data, dt).unwrap();
+            let out = shift_stamp("cdr", &data, dt).unwrap();
             prop_assert_eq!(&out[12..], &data[12..]);
             prop_assert_eq!(&out[..4], &data[..4]);
             let f = |b: &[u8]| { let mut a = [0u8; 4]; a.copy_from_slice(b); a };
@@ -526,6 +538,8 @@ mod tests {
             };
             prop_assert!(n2 < 1_000_000_000);
             prop_assert_eq!(s2 as i64 * 1_000_000_000 + n2 as i64, sec as i64 * 1_000_000_000 + ns as i64 + dt);
+            prop_assert_eq!(header_stamp("cdr", &data).unwrap(), sec as i64 * 1_000_000_000 + ns as i64);
+            prop_assert_eq!(header_stamp("cdr", &out).unwrap(), sec as i64 * 1_000_000_000 + ns as i64 + dt);
         }
     }
 
@@ -540,6 +554,7 @@ mod tests {
         assert_eq!(out[4..8], 11u32.to_le_bytes());
         assert_eq!(out[8..12], 100_000_001u32.to_le_bytes());
         assert_eq!(&out[12..], &data[12..]);
+        assert_eq!(header_stamp("ros1", &out).unwrap(), 11_100_000_001);
         let back = shift_stamp("ros1", &out, -200_000_001).unwrap();
         assert_eq!(back, data);
         assert!(shift_stamp("ros1", &data, -11_000_000_000).is_err());
@@ -548,7 +563,7 @@ mod tests {
 
     #[test]
     fn rejects_short_and_non_cdr() {
-        assert!(shift_header_stamp(&[0, 1, 0, 0], 1).is_err());
-        assert!(shift_header_stamp(&[0, 3, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0], 1).is_err());
+        assert!(shift_stamp("cdr", &[0, 1, 0, 0], 1).is_err());
+        assert!(shift_stamp("cdr", &[0, 3, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0], 1).is_err());
     }
 }

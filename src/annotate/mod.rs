@@ -18,15 +18,15 @@ use std::path::{Path, PathBuf};
 use crate::align::curvature::{curvature_signature, CurvatureSample};
 use crate::decode::message_kind;
 use crate::error::{Error, Result};
+use crate::eval::clock::ClockCorrection;
 use crate::eval::config::{EvalConfig, TrajectoryInput};
 use crate::eval::inputs::Inputs;
-use crate::report::json::Report;
+use crate::report::json::{EstimateReport, Report};
 use crate::report::output::{AtomicFile, OutputGuard};
 use crate::sources::Progress;
 use crate::trajectory::Trajectory;
 use channels::{
-    offset_ns, AlignedSource, Annotator, Counts, CurvatureMessage, DriftErrorMessage, EstimatePlan,
-    Plan,
+    AlignedSource, Annotator, Counts, CurvatureMessage, DriftErrorMessage, EstimatePlan, Plan,
 };
 use copy::{copy_with, CopyOutcome};
 use input_info::{read_input_info, InputInfo};
@@ -225,37 +225,17 @@ fn plan(config: &EvalConfig, report: &Report, inputs: &Inputs) -> Plan {
         .iter()
         .filter_map(|est| {
             let r = report.estimates.iter().find(|r| r.name == est.name)?;
-            let dt_ns = offset_ns(r.time_offset.applied_s);
-            let aligned = est.trajectory.shifted(dt_ns);
+            let shift = ClockCorrection::from_report(&r.time_offset);
+            let aligned = shift.apply(&est.trajectory);
             let topic = config.estimates.iter().find_map(|e| match &e.input {
                 TrajectoryInput::Topic(t) if e.name == est.name => Some(t.clone()),
                 _ => None,
             });
-            let drift_error = r
-                .drift_error
-                .iter()
-                .flat_map(|d| {
-                    d.per_window.iter().map(move |w| {
-                        (
-                            (w.t_end * 1e9).round().max(0.0) as u64,
-                            DriftErrorMessage {
-                                window_m: d.window_m,
-                                t_start: w.t_start,
-                                t_end: w.t_end,
-                                ref_length_m: w.ref_length_m,
-                                est_length_m: w.est_length_m,
-                                alpha: w.alpha,
-                                de: w.de,
-                            },
-                        )
-                    })
-                })
-                .collect();
             Some(EstimatePlan {
                 name: est.name.clone(),
-                dt_ns,
+                shift,
                 curvature: curvature_messages(&aligned, config),
-                drift_error,
+                drift_error: drift_error_messages(r),
                 aligned: match topic {
                     // A TF chain (`/tf:PARENT:CHILD`) has no message of its own to patch: it is
                     // written as PoseStamped from its samples, like a TUM file.
@@ -275,4 +255,27 @@ fn plan(config: &EvalConfig, report: &Report, inputs: &Inputs) -> Plan {
         estimates,
         report: report.clone(),
     }
+}
+
+/// One message per Drift Error window, at the window's end.
+fn drift_error_messages(r: &EstimateReport) -> Vec<(u64, DriftErrorMessage)> {
+    r.drift_error
+        .iter()
+        .flat_map(|d| {
+            d.per_window.iter().map(move |w| {
+                (
+                    (w.t_end * 1e9).round().max(0.0) as u64,
+                    DriftErrorMessage {
+                        window_m: d.window_m,
+                        t_start: w.t_start,
+                        t_end: w.t_end,
+                        ref_length_m: w.ref_length_m,
+                        est_length_m: w.est_length_m,
+                        alpha: w.alpha,
+                        de: w.de,
+                    },
+                )
+            })
+        })
+        .collect()
 }

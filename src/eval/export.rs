@@ -1,6 +1,7 @@
-//! `--export-aligned`: writes each estimate as the Drift Error saw it — shifted onto the reference clock
-//! by the applied time offset (and cropped like the reference) — as a TUM file, so that evo (or any TUM
-//! tool) can compare it with the reference without redoing the time alignment.
+//! `--export-aligned`: writes each estimate as the Drift Error saw it — moved onto the reference clock
+//! by the report's clock correction ([`crate::eval::clock`]; and cropped like the reference) — as a TUM
+//! file, so that evo (or any TUM tool) can compare it with the reference without redoing the time
+//! alignment.
 //!
 //! With one estimate the file is written as given. With several, the estimate's name is inserted before
 //! the extension: `aligned.tum` → `aligned.lio.tum`, `aligned.odom.tum` (characters other than

@@ -1,6 +1,7 @@
 //! The evaluation job: load the trajectories, find each estimate's clock offset, compute its Drift
 //! Error at every window size, and assemble the report. Estimates are evaluated in parallel (rayon).
 
+pub mod clock;
 pub mod config;
 pub mod export;
 pub mod extrinsics;
@@ -14,7 +15,7 @@ use rayon::prelude::*;
 
 use crate::align::auto_offset::auto_time_offset_of;
 use crate::align::auto_params::auto_params;
-use crate::align::clock_model::{clock_model_of, ClockModel, OffsetModel};
+use crate::align::clock_model::{clock_model_of, OffsetModel};
 use crate::align::time_offset::{
     estimate_time_offset_cached, OffsetEstimate, OffsetMethod, OffsetStatus, Pair, SignalCache,
 };
@@ -26,6 +27,7 @@ use crate::report::json::{
     TopicReport, WindowReport, SCHEMA_VERSION,
 };
 use crate::sources::{Progress, Warning};
+use clock::ClockCorrection;
 use config::EvalConfig;
 use inputs::{load, Inputs, Loaded};
 
@@ -237,8 +239,6 @@ fn evaluate_estimate(
     let est_t = est.trajectory.times_s(t0_ns);
     let est_p = &est.trajectory.positions;
     let mut warnings = Vec::new();
-    // The clock model applied to the estimate's stamps (`None`: a constant `applied_s`).
-    let mut clock: Option<ClockModel> = None;
 
     let time_offset = match config.time_offset_s {
         Some(dt) => TimeOffsetReport {
@@ -298,10 +298,8 @@ fn evaluate_estimate(
             };
             match chosen {
                 Some(Ok(o)) if o.status == OffsetStatus::Ok => {
-                    let (report, model, w) =
-                        over_time(config, &params, &pair, &o, &est.name, t0_ns);
+                    let (report, w) = over_time(config, &params, &pair, &o, &est.name, t0_ns);
                     warnings.extend(w);
-                    clock = model;
                     TimeOffsetReport {
                         method: o.method.as_str().into(),
                         offset_s: report.offset_s,
@@ -358,11 +356,8 @@ fn evaluate_estimate(
     };
 
     // Shift onto the reference clock and crop like the reference.
-    let applied_ns = (time_offset.applied_s * 1e9).round() as i64;
-    let mut aligned = match clock.as_ref().filter(|c| c.model != OffsetModel::Constant) {
-        Some(c) => on_reference_clock(&est.trajectory, c, t0_ns),
-        None => est.trajectory.shifted(applied_ns),
-    };
+    // The report's own clock model, to the nanosecond (see `clock`).
+    let mut aligned = ClockCorrection::from_report(&time_offset).apply(&est.trajectory);
     aligned.crop(crop.0, crop.1);
     let aligned_t = aligned.times_s(t0_ns);
     if aligned.len() < 3 {
@@ -513,7 +508,7 @@ fn over_time(
     o: &OffsetEstimate,
     name: &str,
     t0_ns: i64,
-) -> (TimeOffsetReport, Option<ClockModel>, Vec<Warning>) {
+) -> (TimeOffsetReport, Vec<Warning>) {
     let t0_s = t0_ns as f64 * 1e-9;
     let found = clock_model_of(pair, params, o, &config.offset_profile, config.offset_model);
     let Ok((profile, model)) = found else {
@@ -526,7 +521,6 @@ fn over_time(
                 model_reason: Some(reason),
                 ..Default::default()
             },
-            None,
             Vec::new(),
         );
     };
@@ -557,6 +551,7 @@ fn over_time(
         drift_ppm: model
             .drift_ppm
             .filter(|_| model.model == OffsetModel::Linear),
+        t_mid: (model.model == OffsetModel::Linear).then_some(model.t_mid + t0_s),
         drift_resolution_ppm: model.drift_sigma_ppm.map(|s| 3.0 * s),
         segments: model
             .segments
@@ -582,34 +577,5 @@ fn over_time(
         profile_step_s: Some(profile.step_s),
         ..Default::default()
     };
-    (report, Some(model), warnings)
-}
-
-/// `trajectory` (stamps on the estimate's clock) with every stamp mapped onto the reference clock by
-/// `model`; samples the model maps nowhere, or not after the previous one (a backward clock step
-/// repeats a stretch of stamps), are dropped.
-fn on_reference_clock(
-    trajectory: &crate::trajectory::Trajectory,
-    model: &ClockModel,
-    t0_ns: i64,
-) -> crate::trajectory::Trajectory {
-    let mut out = crate::trajectory::Trajectory::new(trajectory.orientations.is_some());
-    for (i, (&ns, p)) in trajectory
-        .stamps_ns
-        .iter()
-        .zip(&trajectory.positions)
-        .enumerate()
-    {
-        let t = (ns - t0_ns) as f64 * 1e-9;
-        let Some(tr) = model.to_reference(t) else {
-            continue;
-        };
-        let stamp = t0_ns + (tr * 1e9).round() as i64;
-        if out.stamps_ns.last().is_some_and(|&last| stamp <= last) {
-            continue;
-        }
-        let q = trajectory.orientations.as_ref().map(|o| o[i]);
-        out.push(stamp, *p, q);
-    }
-    out
+    (report, warnings)
 }

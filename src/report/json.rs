@@ -180,6 +180,10 @@ pub struct TimeOffsetReport {
     /// The drift applied: set only when `model` is `linear`.
     #[serde(default)]
     pub drift_ppm: Option<f64>,
+    /// Linear: the reference time (absolute seconds) at which `offset_s` holds, so that
+    /// Δt(t) = offset_s − drift_ppm·10⁻⁶·(t − t_mid).
+    #[serde(default)]
+    pub t_mid: Option<f64>,
     /// The smallest drift the mission resolves, 3 `drift_sigma_ppm`.
     #[serde(default)]
     pub drift_resolution_ppm: Option<f64>,

@@ -1,0 +1,198 @@
+//! The clock correction applied to an estimate's stamps, as the report states it.
+//!
+//! Drift Error, `--export-aligned` and the annotated recording's aligned channel all move the
+//! estimate's stamps onto the reference clock, and must agree to the nanosecond. So the correction is
+//! built from the report's own numbers (`applied_s`, `model`, `drift_ppm`, `t_mid`, `segments`:
+//! absolute seconds) and applied in integer nanoseconds on the absolute clocks, with no time origin
+//! that one of them could choose differently: a reader of the JSON report can redo it exactly.
+
+use crate::align::clock_model::OffsetModel;
+use crate::report::json::TimeOffsetReport;
+use crate::trajectory::Trajectory;
+
+/// How an estimate's stamps move onto the reference clock.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ClockCorrection {
+    /// Every stamp by Δt_ns = round(applied_s·10⁹).
+    Constant { dt_ns: i64 },
+    /// Δt(t) = offset_s − drift_ppm·10⁻⁶·(t − t_mid), t on the reference clock.
+    Linear {
+        offset_s: f64,
+        drift_ppm: f64,
+        t_mid_ns: i64,
+    },
+    /// A constant offset per segment [t_start, t_end) of the reference clock (the first and the last
+    /// open-ended); a stamp no segment takes (a backward step repeated it) maps nowhere.
+    Piecewise { segments: Vec<(i64, i64, f64)> },
+}
+
+/// Seconds to whole nanoseconds.
+fn ns(seconds: f64) -> i64 {
+    (seconds * 1e9).round() as i64
+}
+
+impl ClockCorrection {
+    /// The correction the report applied: its clock model when the search was confident and chose a
+    /// linear or piecewise one, else the constant `applied_s`.
+    pub fn from_report(o: &TimeOffsetReport) -> ClockCorrection {
+        let constant = ClockCorrection::Constant {
+            dt_ns: ns(o.applied_s),
+        };
+        if o.status != "ok" {
+            return constant;
+        }
+        match (o.model, o.drift_ppm, o.t_mid) {
+            (Some(OffsetModel::Linear), Some(drift_ppm), Some(t_mid)) => ClockCorrection::Linear {
+                offset_s: o.offset_s,
+                drift_ppm,
+                t_mid_ns: ns(t_mid),
+            },
+            (Some(OffsetModel::Piecewise), ..) if !o.segments.is_empty() => {
+                ClockCorrection::Piecewise {
+                    segments: o
+                        .segments
+                        .iter()
+                        .map(|s| (ns(s.t_start), ns(s.t_end), s.offset_s))
+                        .collect(),
+                }
+            }
+            _ => constant,
+        }
+    }
+
+    /// Where the estimate stamp `stamp` (ns) lands on the reference clock; `None` where no segment of
+    /// a piecewise model takes it, or out of the i64 range.
+    pub fn stamp(&self, stamp: i64) -> Option<i64> {
+        match self {
+            ClockCorrection::Constant { dt_ns } => stamp.checked_add(*dt_ns),
+            ClockCorrection::Linear {
+                offset_s,
+                drift_ppm,
+                t_mid_ns,
+            } => {
+                // One fixed-point step: Δt varies by ppm·10⁻⁶ of a second per second.
+                let t = stamp.checked_add(ns(*offset_s))?;
+                let dt = offset_s - drift_ppm * 1e-6 * (t - t_mid_ns) as f64 * 1e-9;
+                stamp.checked_add(ns(dt))
+            }
+            ClockCorrection::Piecewise { segments } => {
+                let n = segments.len();
+                segments
+                    .iter()
+                    .enumerate()
+                    .find_map(|(i, &(start, end, offset_s))| {
+                        let t = stamp.checked_add(ns(offset_s))?;
+                        let after_start = i == 0 || t >= start;
+                        let before_end = i + 1 == n || t < end;
+                        (after_start && before_end).then_some(t)
+                    })
+            }
+        }
+    }
+
+    /// `trajectory` (stamps on the estimate's clock) on the reference clock; samples mapped nowhere,
+    /// or not after the previous one (a backward clock step repeats a stretch of stamps), are dropped.
+    pub fn apply(&self, trajectory: &Trajectory) -> Trajectory {
+        if let ClockCorrection::Constant { dt_ns } = self {
+            return trajectory.shifted(*dt_ns);
+        }
+        let mut out = Trajectory::new(trajectory.orientations.is_some());
+        for (i, (&t, p)) in trajectory
+            .stamps_ns
+            .iter()
+            .zip(&trajectory.positions)
+            .enumerate()
+        {
+            let Some(stamp) = self.stamp(t) else {
+                continue;
+            };
+            if out.stamps_ns.last().is_some_and(|&last| stamp <= last) {
+                continue;
+            }
+            out.push(stamp, *p, trajectory.orientations.as_ref().map(|o| o[i]));
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::json::OffsetSegmentReport;
+
+    fn report(model: OffsetModel) -> TimeOffsetReport {
+        TimeOffsetReport {
+            status: "ok".into(),
+            offset_s: 0.5,
+            applied_s: 0.5,
+            model: Some(model),
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn a_linear_drift_grows_with_the_distance_from_t_mid() {
+        let c = ClockCorrection::from_report(&TimeOffsetReport {
+            drift_ppm: Some(100.0),
+            t_mid: Some(1000.0),
+            ..report(OffsetModel::Linear)
+        });
+        // At t_mid Δt is offset_s; 1000 s later it is 0.1 s smaller (estimate clock fast).
+        assert_eq!(c.stamp(999_500_000_000), Some(1_000_000_000_000));
+        assert_eq!(c.stamp(1_999_500_000_000), Some(1_999_900_000_000));
+    }
+
+    #[test]
+    fn a_step_maps_each_stamp_by_its_segment() {
+        let seg = |a: f64, b: f64, o: f64| OffsetSegmentReport {
+            t_start: a,
+            t_end: b,
+            offset_s: o,
+            sigma_s: 0.001,
+        };
+        // The estimate's clock stepped back 1 s at reference time 10 s: Δt 0, then 1 s. Its stamps
+        // 9–10 s occur twice; each maps to where the first occurrence belongs, and `apply` drops the
+        // repeat (not after the previous sample).
+        let back = ClockCorrection::from_report(&TimeOffsetReport {
+            segments: vec![seg(0.0, 10.0, 0.0), seg(10.0, 20.0, 1.0)],
+            ..report(OffsetModel::Piecewise)
+        });
+        assert_eq!(back.stamp(5_000_000_000), Some(5_000_000_000));
+        assert_eq!(back.stamp(9_500_000_000), Some(9_500_000_000));
+        assert_eq!(back.stamp(12_000_000_000), Some(13_000_000_000));
+        let mut t = Trajectory::new(false);
+        for s in [9.0, 9.5, 9.9, 9.2, 9.6, 10.5] {
+            t.push((s * 1e9) as i64, nalgebra::Vector3::zeros(), None);
+        }
+        let stamps: Vec<i64> = back.apply(&t).stamps_ns;
+        assert_eq!(
+            stamps,
+            [9_000_000_000, 9_500_000_000, 9_900_000_000, 11_500_000_000]
+        );
+        // Stepped forward instead (Δt 1 s, then 0): stamps 9–10 s never occur, and map nowhere.
+        let forward = ClockCorrection::from_report(&TimeOffsetReport {
+            segments: vec![seg(0.0, 10.0, 1.0), seg(10.0, 20.0, 0.0)],
+            ..report(OffsetModel::Piecewise)
+        });
+        assert_eq!(forward.stamp(9_500_000_000), None);
+    }
+
+    #[test]
+    fn weak_or_constant_is_the_applied_offset() {
+        let weak = TimeOffsetReport {
+            status: "weak".into(),
+            applied_s: 0.0,
+            drift_ppm: Some(100.0),
+            t_mid: Some(1000.0),
+            ..report(OffsetModel::Linear)
+        };
+        assert_eq!(
+            ClockCorrection::from_report(&weak),
+            ClockCorrection::Constant { dt_ns: 0 }
+        );
+        assert_eq!(
+            ClockCorrection::from_report(&report(OffsetModel::Constant)),
+            ClockCorrection::Constant { dt_ns: 500_000_000 }
+        );
+    }
+}
