@@ -428,3 +428,66 @@ fn bad_recordings_and_mappings_are_one_line_errors() {
         "`height`",
     );
 }
+
+/// `simulate --clock-step AT:OFFSET` steps the estimate's clock; `eval` finds a piecewise model with
+/// the truth's two offsets and its change time. A malformed step is a usage error.
+#[test]
+fn simulated_clock_step_is_found_piecewise() {
+    let dir = tempfile::tempdir().unwrap();
+    let (rec, json) = (dir.path().join("step.mcap"), dir.path().join("step.json"));
+    let o = run(&[
+        "simulate",
+        s(&rec),
+        "--laps",
+        "3",
+        "--clock-step",
+        "300:-0.1",
+        "--truth",
+        s(&dir.path().join("truth.json")),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run(&[
+        "eval",
+        s(&rec),
+        "--reference",
+        "/reference/position",
+        "--estimate",
+        "/estimate/odom",
+        "--quiet",
+        "--json",
+        s(&json),
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("clock_step_suspected"),
+        "{}",
+        stderr(&o)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let t = &report["estimates"][0]["time_offset"];
+    assert_eq!(t["model"], "piecewise");
+    let seg = t["segments"].as_array().unwrap();
+    assert_eq!(seg.len(), 2);
+    let (first, second) = (
+        seg[0]["offset_s"].as_f64().unwrap(),
+        seg[1]["offset_s"].as_f64().unwrap(),
+    );
+    assert!(
+        (first - 0.2).abs() < 0.01 && (second + 0.1).abs() < 0.01,
+        "{seg:?}"
+    );
+    // The change on the reference clock within a few seconds of the truth's (its stamps are true time).
+    let truth: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("truth.json")).unwrap()).unwrap();
+    assert_eq!(truth["config"]["clock_step"]["at_s"], 300.0);
+    let start = truth["config"]["start_time_ns"].as_i64().unwrap() as f64 * 1e-9;
+    let change = seg[0]["t_end"].as_f64().unwrap() - start;
+    assert!((change - 300.0).abs() < 5.0, "change at {change} s");
+    let o = run(&[
+        "simulate",
+        s(&dir.path().join("x.mcap")),
+        "--clock-step",
+        "3:oops",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+}

@@ -217,6 +217,10 @@ pub struct SimulateArgs {
         allow_hyphen_values = true
     )]
     pub clock_drift_ppm: f64,
+    /// A step of the estimate's clock: from AT seconds on, its Δt is OFFSET (a recorder restart, an
+    /// NTP correction). Samples whose stamp would not increase are dropped.
+    #[arg(long, value_name = "AT:OFFSET", allow_hyphen_values = true)]
+    pub clock_step: Option<trajdrift::simulate::ClockStep>,
     /// Write a GrandTour-like mission instead: OUT is a folder of per-sensor ROS 1 bags
     /// (`<stamp>_cpt7_ie_tc.bag`, `_ap20_prism_position.bag`, `_dlio.bag`, `_anymal_state.bag`,
     /// `_tf_minimal.bag`) with GrandTour's topic names and frames.

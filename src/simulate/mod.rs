@@ -58,6 +58,24 @@ pub struct ClockStep {
     pub offset_s: f64,
 }
 
+impl std::str::FromStr for ClockStep {
+    type Err = String;
+
+    /// `AT:OFFSET`: true time of the step (seconds from the start) and the Δt from then on.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad =
+            || format!("takes AT:OFFSET (seconds from the start, then the new Δt), got `{s}`");
+        let (at, offset) = s.split_once(':').ok_or_else(bad)?;
+        let (at_s, offset_s) = (at.trim().parse::<f64>(), offset.trim().parse::<f64>());
+        match (at_s, offset_s) {
+            (Ok(at_s), Ok(offset_s)) if at_s.is_finite() && at_s >= 0.0 && offset_s.is_finite() => {
+                Ok(ClockStep { at_s, offset_s })
+            }
+            _ => Err(bad()),
+        }
+    }
+}
+
 impl Default for MissionConfig {
     /// A small wheeled mission: 10 Hz reference with 2 cm noise, 20 Hz estimate 0.3 m to the left of
     /// it, 2 % scale error, Δt = +0.2 s.

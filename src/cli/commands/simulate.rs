@@ -52,6 +52,7 @@ pub fn run(a: SimulateArgs) -> Result<u8> {
         scale_error: a.scale_error,
         est_lever_m: a.lever,
         clock_drift_ppm: a.clock_drift_ppm,
+        clock_step: a.clock_step,
         ..MissionConfig::default()
     };
     let route: Vec<_> = std::iter::repeat_n(default_route(), a.laps.max(1))
