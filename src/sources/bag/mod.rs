@@ -31,6 +31,9 @@ pub struct BagSource {
     size: u64,
     /// Where the index (connections, chunk infos) starts; 0 for a bag that was never closed.
     index_pos: u64,
+    /// The index's connections, read once (the fail-fast topic check and the evaluation's look at
+    /// the reference's type both ask).
+    channels: std::sync::OnceLock<Option<Vec<ChannelInfo>>>,
 }
 
 /// Channels of a pass: connection id → channel index and whether it is selected.
@@ -72,6 +75,7 @@ impl BagSource {
             path: path.to_path_buf(),
             size,
             index_pos: if index_pos >= size { 0 } else { index_pos },
+            channels: std::sync::OnceLock::new(),
         })
     }
 
@@ -275,7 +279,9 @@ impl Recording for BagSource {
     }
 
     fn known_channels(&self) -> Option<Vec<ChannelInfo>> {
-        self.read_index().map(|(c, _)| c)
+        self.channels
+            .get_or_init(|| self.read_index().map(|(c, _)| c))
+            .clone()
     }
 
     fn pass(

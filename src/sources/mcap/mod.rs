@@ -25,6 +25,9 @@ pub use summary::{read_summary, SummaryInfo};
 pub struct McapSource {
     path: PathBuf,
     size: u64,
+    /// The summary's channels, read once (the fail-fast topic check and the evaluation's look at the
+    /// reference's type both ask).
+    channels: std::sync::OnceLock<Option<Vec<ChannelInfo>>>,
 }
 
 impl McapSource {
@@ -37,6 +40,7 @@ impl McapSource {
         Ok(McapSource {
             path: path.to_path_buf(),
             size,
+            channels: std::sync::OnceLock::new(),
         })
     }
 
@@ -75,7 +79,9 @@ impl Recording for McapSource {
     }
 
     fn known_channels(&self) -> Option<Vec<ChannelInfo>> {
-        read_summary(&self.path).map(|s| s.channels)
+        self.channels
+            .get_or_init(|| read_summary(&self.path).map(|s| s.channels))
+            .clone()
     }
 
     fn pass(
