@@ -491,3 +491,30 @@ fn simulated_clock_step_is_found_piecewise() {
     ]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// `simulate --duration S --est-rate HZ` (issue 13's recording, scaled down): the route repeated and
+/// cut to S seconds, the estimate at HZ; `--duration` and `--laps` exclude each other.
+#[test]
+fn simulate_takes_a_duration_and_an_estimate_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("long.mcap");
+    let o = run(&["simulate", s(&rec), "--duration", "400", "--est-rate", "50"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("(400 s, 4001 reference and 20001 estimate samples)"),
+        "{}",
+        stderr(&o)
+    );
+    let o = run(&[
+        "simulate",
+        s(&rec),
+        "--force",
+        "--duration",
+        "10",
+        "--laps",
+        "2",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = run(&["simulate", s(&rec), "--force", "--est-rate", "0"]);
+    assert_eq!(o.status.code(), Some(2));
+}

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use trajdrift::eval::parameters::{triple, word, Parameters};
+use trajdrift::eval::parameters::{positive, triple, word, Parameters};
 use trajdrift::sources::StampSource;
 
 /// Evaluate robot trajectories from positions alone: curvature-based time alignment and Drift Error.
@@ -201,8 +201,14 @@ pub struct SimulateArgs {
     )]
     pub lever: [f64; 3],
     /// Repeat the route this many times (longer missions).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, conflicts_with = "duration")]
     pub laps: usize,
+    /// Repeat the route to last exactly this long, seconds (instead of --laps).
+    #[arg(long, value_name = "S", value_parser = positive)]
+    pub duration: Option<f64>,
+    /// Rate of the estimate (Odometry), Hz.
+    #[arg(long, value_name = "HZ", default_value_t = 20.0, value_parser = positive)]
+    pub est_rate: f64,
     /// Add an unrelated bulk channel (like lidar) totalling about this many MiB.
     #[arg(long, value_name = "MIB", default_value_t = 0)]
     pub bulk_mib: u64,

@@ -307,6 +307,14 @@ impl Word for EvalMetric {
     }
 }
 
+/// Parses a finite number above zero (clap's parser for durations and rates).
+pub fn positive(s: &str) -> std::result::Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("takes a number above zero, got `{s}`")),
+    }
+}
+
 /// Parses `a,b,c` into three numbers (clap's parser for `--origin` and other triples).
 pub fn triple(s: &str) -> std::result::Result<[f64; 3], String> {
     let bad = || format!("takes three comma-separated numbers, got `{s}`");

@@ -110,6 +110,27 @@ pub struct Mission {
     pub duration_s: f64,
 }
 
+/// `lap` repeated, cut to last exactly `duration_s` seconds (the last segment shortened).
+pub fn route_of_duration(lap: &[Segment], duration_s: f64) -> Vec<Segment> {
+    let lap_s: f64 = lap.iter().map(|s| s.duration_s).sum();
+    if lap.is_empty() || !(lap_s > 0.0 && duration_s > 0.0) {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    let mut left = duration_s;
+    for s in lap.iter().cycle() {
+        if left <= 0.0 {
+            break;
+        }
+        out.push(Segment {
+            duration_s: s.duration_s.min(left),
+            ..*s
+        });
+        left -= s.duration_s;
+    }
+    out
+}
+
 /// The default route: a stop, S-curves, loops left and right, straights, stops; about 150 s.
 pub fn default_route() -> Vec<Segment> {
     let s = |d: f64, v: f64, k: f64| Segment {

@@ -5,7 +5,7 @@ use anyhow::{anyhow, Result};
 
 use trajdrift::report::output::{write_output, AtomicFile};
 use trajdrift::simulate::writer::{truth_json, write_mcap};
-use trajdrift::simulate::{default_route, simulate, MissionConfig};
+use trajdrift::simulate::{default_route, route_of_duration, simulate, MissionConfig};
 
 use crate::cli::args::SimulateArgs;
 use crate::cli::EXIT_OK;
@@ -53,11 +53,15 @@ pub fn run(a: SimulateArgs) -> Result<u8> {
         est_lever_m: a.lever,
         clock_drift_ppm: a.clock_drift_ppm,
         clock_step: a.clock_step,
+        est_rate_hz: a.est_rate,
         ..MissionConfig::default()
     };
-    let route: Vec<_> = std::iter::repeat_n(default_route(), a.laps.max(1))
-        .flatten()
-        .collect();
+    let route: Vec<_> = match a.duration {
+        Some(seconds) => route_of_duration(&default_route(), seconds),
+        None => std::iter::repeat_n(default_route(), a.laps.max(1))
+            .flatten()
+            .collect(),
+    };
     let mission = simulate(&config, &route);
     let bulk_messages = (mission.duration_s * 10.0).max(1.0);
     let bulk_bytes = (a.bulk_mib as f64 * 1024.0 * 1024.0 / bulk_messages) as usize;
