@@ -7,7 +7,8 @@
 //!   200 Hz Odometry estimate; written once to `target/bench-data/`): the floor — the `mcap` crate's
 //!   streaming `LinearReader` and `cdr-encoding` decoding both topics into memory, nothing else — and
 //!   `trajdrift eval` with all defaults, each in its own child process: wall time, peak RSS (wait4), and
-//!   the ratios eval/floor (targets ≤ 1.5× time, ≤ 2× memory);
+//!   the ratios eval/floor (targets ≤ 1.5× time, ≤ 2× memory); and `eval` once more with glibc's
+//!   mmap threshold left dynamic (`TRAJDRIFT_MALLOC_DYNAMIC=1`), what the allocator setting is worth;
 //! - `trajdrift eval` with all defaults on each shared 2–8-minute mission (target ≤ 0.15 s);
 //! - `trajdrift batch` over 8 missions with `--jobs 1` and `--jobs 2`, and the speed-up (target ≥ 1.7×).
 //!
@@ -158,7 +159,18 @@ fn ratio(long: &Path, dir: &Path) {
         esecs / fsecs,
         emem as f64 / fmem as f64
     );
+    // The same without the allocator setting of src/cli/allocator.rs (what it is worth).
+    let mut dynamic = eval_command(long);
+    dynamic.env(DYNAMIC_VAR, "1");
+    let (dc, dmem, dsecs) = measure(dynamic);
+    println!(
+        "throughput:   eval with glibc's dynamic mmap threshold ({DYNAMIC_VAR}=1): {dsecs:6.2} s, peak RSS {:6.1} MiB (exit {dc:?})",
+        mib(dmem)
+    );
 }
+
+/// Leaves glibc's mmap threshold dynamic (see src/cli/allocator.rs).
+const DYNAMIC_VAR: &str = "TRAJDRIFT_MALLOC_DYNAMIC";
 
 const SHORT: [&str; 5] = [
     "lever_arm",

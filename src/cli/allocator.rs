@@ -7,17 +7,20 @@
 //! process kept far more than it used: on the 2-hour bench recording (session 5), a peak RSS of 208 MiB
 //! for a live heap of about 150 MB (heaptrack). A fixed threshold of 1 MiB keeps every large block
 //! out of the arenas: the peak RSS falls to 141 MiB for about 3 % more time (`cargo bench --bench
-//! throughput` prints the figure; `MALLOC_MMAP_THRESHOLD_` in the environment still overrides it). Other
+//! throughput` prints both; `MALLOC_MMAP_THRESHOLD_` in the environment still overrides it). Other
 //! allocators (musl, macOS) have no such threshold, and nothing is changed there.
 
 /// Blocks at or above this size are mapped on their own.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 const MMAP_THRESHOLD: libc::c_int = 1 << 20;
 
-/// Sets the threshold (glibc only), unless the user set one in the environment.
+/// Sets the threshold (glibc only), unless the user set one in the environment or asked for glibc's
+/// own dynamic threshold with `TRAJDRIFT_MALLOC_DYNAMIC=1` (the throughput bench compares both).
 pub fn return_large_blocks() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    if std::env::var_os("MALLOC_MMAP_THRESHOLD_").is_none() {
+    if std::env::var_os("MALLOC_MMAP_THRESHOLD_").is_none()
+        && std::env::var_os("TRAJDRIFT_MALLOC_DYNAMIC").is_none()
+    {
         // SAFETY: mallopt only sets a tuning parameter of the allocator; it is called once, before
         // any other thread exists.
         unsafe {
