@@ -339,7 +339,8 @@ fn attachments_metadata_and_lz4_survive_and_tum_estimates_become_poses() {
 
 /// Under a linear or piecewise clock model the aligned channel follows the model stamp by stamp: every
 /// aligned message moved (stamp, log and publish time) by one shift, the shifts not all equal, and
-/// every stamp `--export-aligned` wrote (what Drift Error saw) present on the channel.
+/// every stamp `--export-aligned` wrote (what Drift Error saw) present on the channel: the header
+/// stamps, or with `--stamp log` the log times.
 #[test]
 fn aligned_channel_follows_a_non_constant_clock_model() {
     let Some(shared) = common::shared() else {
@@ -348,67 +349,129 @@ fn aligned_channel_follows_a_non_constant_clock_model() {
     let dir = tempfile::tempdir().unwrap();
     for (m, model) in [("clock_drift", "linear"), ("clock_step", "piecewise")] {
         let input = common::mission(&shared, m).join("mission.mcap");
-        let (out, tum, json) = (
-            dir.path().join(format!("{m}.mcap")),
-            dir.path().join(format!("{m}.tum")),
-            dir.path().join(format!("{m}.json")),
-        );
-        let o = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
-            .arg("eval")
-            .arg(&input)
-            .args(["--reference", "/reference/position"])
-            .args(["--estimate", "/estimate/odom", "--quiet", "--annotate"])
-            .arg(&out)
-            .arg("--export-aligned")
-            .arg(&tum)
-            .arg("--json")
-            .arg(&json)
-            .output()
-            .unwrap();
-        assert!(matches!(o.status.code(), Some(0 | 3)), "{m}: {o:?}");
-        let report: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
-        assert_eq!(report["estimates"][0]["time_offset"]["model"], model, "{m}");
+        follows_the_model(&input, &dir.path().join(m), model, false);
+    }
+    // The estimate's log times 3 s after its header stamps: with `--stamp log` the model is a function
+    // of the log time, and a message near the step takes the segment of its log time.
+    let late = dir.path().join("late.mcap");
+    with_late_log_times(
+        &common::mission(&shared, "clock_step").join("mission.mcap"),
+        &late,
+        "/estimate/odom",
+        3_000_000_000,
+    );
+    follows_the_model(&late, &dir.path().join("late-annotated"), "piecewise", true);
+}
 
-        let (a, b) = (read(&input), read(&out));
-        let channel = |c: &Contents, topic: &str| {
-            c.channels
-                .iter()
-                .find(|(_, v)| v.0 == topic)
-                .map(|(id, _)| *id)
-                .unwrap()
-        };
-        let (src, dst) = (
-            channel(&a, "/estimate/odom"),
-            channel(&b, "/trajdrift/estimate/odom/aligned"),
-        );
-        // Input messages by their bytes after the stamp (unique: the pose differs sample to sample).
-        let originals: BTreeMap<&[u8], (i64, u64, u64)> = a
-            .messages
+/// Evaluates `input` with `--annotate` and `--export-aligned` into files beside `stem` and checks the
+/// aligned channel against the model and the export (see the test above).
+fn follows_the_model(input: &Path, stem: &Path, model: &str, log_stamps: bool) {
+    let (out, tum, json) = (
+        stem.with_extension("mcap"),
+        stem.with_extension("tum"),
+        stem.with_extension("json"),
+    );
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_trajdrift"));
+    cmd.arg("eval")
+        .arg(input)
+        .args(["--reference", "/reference/position"])
+        .args(["--estimate", "/estimate/odom", "--quiet", "--annotate"])
+        .arg(&out)
+        .arg("--export-aligned")
+        .arg(&tum)
+        .arg("--json")
+        .arg(&json);
+    if log_stamps {
+        cmd.args(["--stamp", "log"]);
+    }
+    let o = cmd.output().unwrap();
+    let m = input.display();
+    assert!(matches!(o.status.code(), Some(0 | 3)), "{m}: {o:?}");
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(report["estimates"][0]["time_offset"]["model"], model, "{m}");
+
+    let (a, b) = (read(input), read(&out));
+    let channel = |c: &Contents, topic: &str| {
+        c.channels
             .iter()
-            .filter(|x| x.0 == src)
-            .map(|x| (&x.4[12..], (stamp_ns(&x.4), x.2, x.3)))
-            .collect();
-        let mut shifts = std::collections::BTreeSet::new();
-        let mut stamps = std::collections::BTreeSet::new();
-        for x in b.messages.iter().filter(|x| x.0 == dst) {
-            let (stamp, log, publish) = originals[&x.4[12..]];
-            let dt = stamp_ns(&x.4) - stamp;
-            assert_eq!(x.2 as i64 - log as i64, dt, "{m}: log time");
-            assert_eq!(x.3 as i64 - publish as i64, dt, "{m}: publish time");
-            shifts.insert(dt);
-            stamps.insert(stamp_ns(&x.4));
-        }
-        assert!(shifts.len() > 1, "{m}: one shift for every message");
-        let exported = std::fs::read_to_string(&tum).unwrap();
-        for line in exported.lines().filter(|l| !l.starts_with('#')) {
-            let t = line.split_whitespace().next().unwrap();
-            let (s, ns) = t.split_once('.').unwrap();
-            let stamp = s.parse::<i64>().unwrap() * 1_000_000_000 + ns.parse::<i64>().unwrap();
-            assert!(
-                stamps.contains(&stamp),
-                "{m}: exported stamp {t} not on the aligned channel"
-            );
+            .find(|(_, v)| v.0 == topic)
+            .map(|(id, _)| *id)
+            .unwrap()
+    };
+    let (src, dst) = (
+        channel(&a, "/estimate/odom"),
+        channel(&b, "/trajdrift/estimate/odom/aligned"),
+    );
+    // Input messages by their bytes after the stamp (unique: the pose differs sample to sample).
+    let originals: BTreeMap<&[u8], (i64, u64, u64)> = a
+        .messages
+        .iter()
+        .filter(|x| x.0 == src)
+        .map(|x| (&x.4[12..], (stamp_ns(&x.4), x.2, x.3)))
+        .collect();
+    let mut shifts = std::collections::BTreeSet::new();
+    let mut stamps = std::collections::BTreeSet::new();
+    for x in b.messages.iter().filter(|x| x.0 == dst) {
+        let (stamp, log, publish) = originals[&x.4[12..]];
+        let dt = stamp_ns(&x.4) - stamp;
+        assert_eq!(x.2 as i64 - log as i64, dt, "{m}: log time");
+        assert_eq!(x.3 as i64 - publish as i64, dt, "{m}: publish time");
+        shifts.insert(dt);
+        stamps.insert(if log_stamps {
+            x.2 as i64
+        } else {
+            stamp_ns(&x.4)
+        });
+    }
+    assert!(shifts.len() > 1, "{m}: one shift for every message");
+    let exported = std::fs::read_to_string(&tum).unwrap();
+    for line in exported.lines().filter(|l| !l.starts_with('#')) {
+        let t = line.split_whitespace().next().unwrap();
+        let (s, ns) = t.split_once('.').unwrap();
+        let stamp = s.parse::<i64>().unwrap() * 1_000_000_000 + ns.parse::<i64>().unwrap();
+        assert!(
+            stamps.contains(&stamp),
+            "{m}: exported stamp {t} not on the aligned channel"
+        );
+    }
+}
+
+/// A copy of `input` whose messages on `topic` are logged (and published) `dt_ns` later.
+fn with_late_log_times(input: &Path, out: &Path, topic: &str, dt_ns: u64) {
+    let buf = std::fs::read(input).unwrap();
+    let mut w = mcap::WriteOptions::new()
+        .profile("ros2")
+        .create(std::io::BufWriter::new(std::fs::File::create(out).unwrap()))
+        .unwrap();
+    let mut late = std::collections::BTreeSet::new();
+    for r in mcap::read::ChunkFlattener::new(&buf).unwrap() {
+        match r.unwrap() {
+            Record::Schema { header, data } => {
+                w.add_schema_with_id(header.id, &header.name, &header.encoding, &data)
+                    .unwrap();
+            }
+            Record::Channel(c) => {
+                if c.topic == topic {
+                    late.insert(c.id);
+                }
+                w.add_channel_with_id(
+                    c.id,
+                    c.schema_id,
+                    &c.topic,
+                    &c.message_encoding,
+                    &c.metadata,
+                )
+                .unwrap();
+            }
+            Record::Message { mut header, data } => {
+                if late.contains(&header.channel_id) {
+                    header.log_time += dt_ns;
+                    header.publish_time += dt_ns;
+                }
+                w.write_to_known_channel(&header, &data).unwrap();
+            }
+            _ => {}
         }
     }
+    w.finish().unwrap();
 }

@@ -27,6 +27,7 @@ use crate::decode::ros2_schemas::schema_text;
 use crate::error::{Error, Result};
 use crate::eval::clock::ClockCorrection;
 use crate::report::json::Report;
+use crate::sources::StampSource;
 use crate::trajectory::Trajectory;
 
 /// JSON schema of a drift_error message (`schemas/drift_error.schema.json`).
@@ -88,6 +89,9 @@ pub struct Plan {
     pub reference_curvature: Vec<(u64, CurvatureMessage)>,
     pub estimates: Vec<EstimatePlan>,
     pub report: Report,
+    /// The stamp the evaluation read (`--stamp`): the clock correction is a function of it, so a
+    /// patched message's shift is taken at its header stamp or at its log time.
+    pub stamp: StampSource,
 }
 
 /// A generated message waiting for its place in log-time order.
@@ -360,7 +364,12 @@ impl<W: Write + Seek> Annotations<W> for Annotator {
             index: u64::from(header.sequence),
             detail,
         };
-        let stamp = header_stamp(&channel.message_encoding, data).map_err(decode_error)?;
+        let stamp = match self.plan.stamp {
+            StampSource::Header => {
+                header_stamp(&channel.message_encoding, data).map_err(decode_error)?
+            }
+            StampSource::Log => i64::try_from(header.log_time).unwrap_or(i64::MAX),
+        };
         // A stamp the clock model maps nowhere (repeated by a backward step) has no aligned copy.
         let Some(dt_ns) = self.plan.estimates[i].shift.stamp(stamp).map(|s| s - stamp) else {
             return Ok(());

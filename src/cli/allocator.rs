@@ -14,12 +14,15 @@
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 const MMAP_THRESHOLD: libc::c_int = 1 << 20;
 
-/// Sets the threshold (glibc only), unless the user set one in the environment or asked for glibc's
-/// own dynamic threshold with `TRAJDRIFT_MALLOC_DYNAMIC=1` (the throughput bench compares both).
+/// Sets the threshold (glibc only), unless the user set one in the environment
+/// (`MALLOC_MMAP_THRESHOLD_`, or `glibc.malloc.mmap_threshold` in `GLIBC_TUNABLES`) or asked for
+/// glibc's own dynamic threshold with `TRAJDRIFT_MALLOC_DYNAMIC=1` (the throughput bench compares
+/// both).
 pub fn return_large_blocks() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     if std::env::var_os("MALLOC_MMAP_THRESHOLD_").is_none()
-        && std::env::var_os("TRAJDRIFT_MALLOC_DYNAMIC").is_none()
+        && !std::env::var("GLIBC_TUNABLES").is_ok_and(|t| t.contains("glibc.malloc.mmap_threshold"))
+        && std::env::var("TRAJDRIFT_MALLOC_DYNAMIC").as_deref() != Ok("1")
     {
         // SAFETY: mallopt only sets a tuning parameter of the allocator; it is called once, before
         // any other thread exists.
