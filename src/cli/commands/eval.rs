@@ -155,11 +155,16 @@ pub fn run(a: EvalArgs) -> Result<u8> {
         bytes.push(b'\n');
         guard.write("--json", path, &bytes)?;
     }
-    if !a.quiet && !json_to_stdout {
+    let table = !a.quiet && !json_to_stdout;
+    if table {
         crate::cli::emit(&table::render(&report))?;
     }
-    for w in &report.warnings {
-        crate::cli::warn(&w.code, &w.message);
+    // The table ends with the warnings; a terminal showing it needs them only once. Otherwise
+    // (quiet, JSON on stdout, stdout redirected) they go to stderr, where the user sees them.
+    if !(table && std::io::IsTerminal::is_terminal(&std::io::stdout())) {
+        for w in &report.warnings {
+            crate::cli::warn(&w.code, &w.message);
+        }
     }
     Ok(if report.warnings.is_empty() {
         EXIT_OK
