@@ -234,34 +234,12 @@ fn annotated_fixtures_keep_every_record_and_add_the_results() {
 
 /// A recording with an attachment, a metadata record and lz4 chunks, from a fixture.
 fn with_extras(input: &Path, out: &Path) {
-    let buf = std::fs::read(input).unwrap();
     let mut w = mcap::WriteOptions::new()
         .profile("ros2")
         .compression(Some(mcap::Compression::Lz4))
         .create(std::io::BufWriter::new(std::fs::File::create(out).unwrap()))
         .unwrap();
-    for r in mcap::read::ChunkFlattener::new(&buf).unwrap() {
-        match r.unwrap() {
-            Record::Schema { header, data } => {
-                w.add_schema_with_id(header.id, &header.name, &header.encoding, &data)
-                    .unwrap();
-            }
-            Record::Channel(c) => {
-                w.add_channel_with_id(
-                    c.id,
-                    c.schema_id,
-                    &c.topic,
-                    &c.message_encoding,
-                    &c.metadata,
-                )
-                .unwrap();
-            }
-            Record::Message { header, data } => {
-                w.write_to_known_channel(&header, &data).unwrap();
-            }
-            _ => {}
-        }
-    }
+    copy_into(input, &mut w, |_, _| {});
     w.attach(&mcap::Attachment {
         log_time: 5,
         create_time: 6,
@@ -438,12 +416,28 @@ fn follows_the_model(input: &Path, stem: &Path, model: &str, log_stamps: bool) {
 
 /// A copy of `input` whose messages on `topic` are logged (and published) `dt_ns` later.
 fn with_late_log_times(input: &Path, out: &Path, topic: &str, dt_ns: u64) {
-    let buf = std::fs::read(input).unwrap();
     let mut w = mcap::WriteOptions::new()
         .profile("ros2")
         .create(std::io::BufWriter::new(std::fs::File::create(out).unwrap()))
         .unwrap();
-    let mut late = std::collections::BTreeSet::new();
+    copy_into(input, &mut w, |t, header| {
+        if t == topic {
+            header.log_time += dt_ns;
+            header.publish_time += dt_ns;
+        }
+    });
+    w.finish().unwrap();
+}
+
+/// Copies the schemas, channels and messages of `input` into `w` (same ids), each message header
+/// passed through `edit` with its channel's topic.
+fn copy_into<W: std::io::Write + std::io::Seek>(
+    input: &Path,
+    w: &mut mcap::Writer<W>,
+    mut edit: impl FnMut(&str, &mut mcap::records::MessageHeader),
+) {
+    let buf = std::fs::read(input).unwrap();
+    let mut topics = BTreeMap::new();
     for r in mcap::read::ChunkFlattener::new(&buf).unwrap() {
         match r.unwrap() {
             Record::Schema { header, data } => {
@@ -451,9 +445,6 @@ fn with_late_log_times(input: &Path, out: &Path, topic: &str, dt_ns: u64) {
                     .unwrap();
             }
             Record::Channel(c) => {
-                if c.topic == topic {
-                    late.insert(c.id);
-                }
                 w.add_channel_with_id(
                     c.id,
                     c.schema_id,
@@ -462,16 +453,13 @@ fn with_late_log_times(input: &Path, out: &Path, topic: &str, dt_ns: u64) {
                     &c.metadata,
                 )
                 .unwrap();
+                topics.insert(c.id, c.topic);
             }
             Record::Message { mut header, data } => {
-                if late.contains(&header.channel_id) {
-                    header.log_time += dt_ns;
-                    header.publish_time += dt_ns;
-                }
+                edit(&topics[&header.channel_id], &mut header);
                 w.write_to_known_channel(&header, &data).unwrap();
             }
             _ => {}
         }
     }
-    w.finish().unwrap();
 }
