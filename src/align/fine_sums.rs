@@ -91,7 +91,7 @@ impl Sums {
     }
 }
 
-/// The smallest grid index m with m·hf ≥ t (the same products [`resample_finite_on_grid`] forms).
+/// The smallest grid index m with m·hf ≥ t (the same products [`resample_into`] forms).
 fn first_at_or_after(t: f64, hf: f64) -> i64 {
     let mut m = (t / hf).ceil() as i64;
     while ((m - 1) as f64) * hf >= t {
@@ -104,7 +104,7 @@ fn first_at_or_after(t: f64, hf: f64) -> i64 {
 }
 
 /// The runs of the sparse signal on the fine grid, in order, each at most `BLOCK / 4` long. A grid
-/// point belongs to the last sample at or before it (as in [`resample_finite_on_grid`]): equal to it
+/// point belongs to the last sample at or before it (as in [`resample_into`]): equal to it
 /// within 1e-9 of a step, it takes that sample's value; otherwise it interpolates towards the next
 /// sample, unless they are more than `gap` apart or it is the last.
 fn runs(t: &[f64], v: &[f64], hf: f64, gap: f64) -> Vec<Run> {

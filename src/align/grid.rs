@@ -67,47 +67,26 @@ pub fn resample_on_grid(
     len: usize,
     max_gap_s: f64,
 ) -> RegularSignal {
-    let n = times.len().min(values.len());
-    if (0..n).all(|k| times[k].is_finite() && values[k].is_finite()) {
-        return resample_finite_on_grid(
-            &times[..n],
-            &values[..n],
-            step,
-            first_index,
-            len,
-            max_gap_s,
-        );
-    }
-    let (t, v): (Vec<f64>, Vec<f64>) = times
-        .iter()
-        .zip(values)
-        .filter(|(t, v)| t.is_finite() && v.is_finite())
-        .unzip();
-    resample_finite_on_grid(&t, &v, step, first_index, len, max_gap_s)
+    read_grid(
+        &LazyGrid::new(times, values, step, max_gap_s),
+        first_index,
+        len,
+    )
 }
 
-/// [`resample_on_grid`] of samples that are all finite, `times` non-decreasing and as long as
-/// `values`: no copy of the samples (see [`resample_into`]).
-pub fn resample_finite_on_grid(
-    times: &[f64],
-    values: &[f64],
-    step: f64,
-    first_index: i64,
-    len: usize,
-    max_gap_s: f64,
-) -> RegularSignal {
+/// The `len` points from grid index `first_index` of `grid`, held whole (outside the samples' span
+/// every point is undefined).
+fn read_grid(grid: &LazyGrid<'_>, first_index: i64, len: usize) -> RegularSignal {
     let mut out = RegularSignal {
         first_index,
-        step,
+        step: grid.step,
         values: vec![0.0; len],
         mask: vec![0.0; len],
     };
-    resample_into(
-        (times, values),
-        (step, 0.0),
-        first_index,
-        (&mut out.values, &mut out.mask),
-        max_gap_s,
+    grid.read(
+        first_index - grid.first_index,
+        &mut out.values,
+        &mut out.mask,
     );
     out
 }
@@ -304,29 +283,8 @@ impl GridBlocks for LazyGrid<'_> {
 /// Resamples onto every grid point t = n·step inside the samples' span (see [`resample_on_grid`]).
 /// Returns an empty signal when there is no finite sample or no grid point in the span.
 pub fn resample(times: &[f64], values: &[f64], step: f64, max_gap_s: f64) -> RegularSignal {
-    let finite = times
-        .iter()
-        .zip(values)
-        .filter(|(t, v)| t.is_finite() && v.is_finite());
-    let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (&t, _)| {
-        (lo.min(t), hi.max(t))
-    });
-    match grid_span(lo, hi, step) {
-        Some((first, last)) => resample_on_grid(
-            times,
-            values,
-            step,
-            first,
-            (last - first + 1) as usize,
-            max_gap_s,
-        ),
-        None => RegularSignal {
-            first_index: 0,
-            step,
-            values: vec![],
-            mask: vec![],
-        },
-    }
+    let grid = LazyGrid::new(times, values, step, max_gap_s);
+    read_grid(&grid, grid.first_index, grid.len())
 }
 
 #[cfg(test)]
