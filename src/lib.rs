@@ -1,20 +1,18 @@
 //! trajdrift: evaluate robot trajectories from positions alone.
 //!
-//! The pipeline reads like the folders: [`sources`] → [`decode`] → [`trajectory`] → [`align`] (time) →
-//! [`metrics`] → [`report`]. The binary only parses arguments and prints.
+//! This crate is the application: the evaluation of a request ([`eval`]), annotated copies of
+//! recordings ([`annotate`]), batches of missions ([`batch`]), figures ([`plot`]) and the command line.
+//! Everything below it — readers, trajectories, the time alignment, the metrics, the report types — is the
+//! core crate [`trajdrift_core`], re-exported here.
 
-pub mod align;
-pub mod decode;
-pub mod error;
-pub mod eval;
-pub mod metrics;
-pub mod report;
-pub mod simulate;
-pub mod sources;
-pub mod trajectory;
+pub use trajdrift_core::{
+    align, clock, decode, diag, error, metrics, output, report, simulate, sources, trajectory,
+};
+pub use trajdrift_core::{Error, Result, Trajectory};
 
-pub use error::{Error, Result};
-pub use trajectory::Trajectory;
 pub mod annotate;
 pub mod batch;
+pub mod eval;
 pub mod plot;
+pub mod render;
+pub mod standard;

@@ -5,7 +5,7 @@
 mod common;
 
 use libfuzzer_sys::fuzz_target;
-use trajdrift::sources::bag::BagSource;
+use trajdrift_core::sources::bag::BagSource;
 
 fuzz_target!(|data: &[u8]| {
     let path = common::scratch(data, "bag");

@@ -2,7 +2,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use trajdrift::decode::{decode_message, Encoding, MessageKind};
+use trajdrift_core::decode::{decode_message, Encoding, MessageKind};
 
 const KINDS: [MessageKind; 6] = [
     MessageKind::PoseStamped,

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use trajdrift::sources::{ExtractOptions, Source};
+use trajdrift_core::sources::{ExtractOptions, Source};
 
 /// Writes `data` to this process's scratch file with extension `ext`.
 pub fn scratch(data: &[u8], ext: &str) -> PathBuf {
@@ -33,7 +33,7 @@ pub fn exercise(source: &dyn Source) {
     let _ = source.extract(&readable, &ExtractOptions::default(), &|_| {});
     if let Some(first) = readable.first() {
         let options = ExtractOptions {
-            stamp: trajdrift::sources::StampSource::Log,
+            stamp: trajdrift_core::sources::StampSource::Log,
             ..ExtractOptions::default()
         };
         let _ = source.extract(std::slice::from_ref(first), &options, &|_| {});

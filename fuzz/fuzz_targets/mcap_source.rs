@@ -5,7 +5,7 @@
 mod common;
 
 use libfuzzer_sys::fuzz_target;
-use trajdrift::sources::mcap::McapSource;
+use trajdrift_core::sources::mcap::McapSource;
 
 fuzz_target!(|data: &[u8]| {
     let path = common::scratch(data, "mcap");

@@ -6,7 +6,7 @@
 mod common;
 
 use libfuzzer_sys::fuzz_target;
-use trajdrift::sources::text::{read_text, TextOptions};
+use trajdrift_core::sources::text::{read_text, TextOptions};
 
 fuzz_target!(|data: &[u8]| {
     let Some((&pick, rest)) = data.split_first() else {

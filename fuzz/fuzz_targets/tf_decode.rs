@@ -2,8 +2,8 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use trajdrift::decode::tf::{decode_tf_message, decode_transform_stamped};
-use trajdrift::decode::Encoding;
+use trajdrift_core::decode::tf::{decode_tf_message, decode_transform_stamped};
+use trajdrift_core::decode::Encoding;
 
 fuzz_target!(|data: &[u8]| {
     for encoding in [Encoding::Cdr, Encoding::Ros1] {

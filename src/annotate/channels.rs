@@ -9,7 +9,7 @@
 //!
 //! Shifts are integer nanoseconds, added exactly to the header stamp, the log time and the publish
 //! time: Δt_ns = round(applied_s × 10⁹), or per stamp the report's linear or piecewise clock model
-//! ([`crate::eval::clock`]), as Drift Error and `--export-aligned` applied it.
+//! ([`crate::clock`]), as Drift Error and `--export-aligned` applied it.
 
 use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::io::{Seek, Write};
@@ -21,11 +21,11 @@ use serde::Serialize;
 
 use super::copy::{Annotations, InputChannel};
 use super::metadata::{metadata_map, ATTACHMENT_NAME, METADATA_NAME};
+use crate::clock::ClockCorrection;
 use crate::decode::cdr::encode_le;
 use crate::decode::ros2_msgs::{Header, Point, Pose, PoseStamped, Quaternion, Time};
 use crate::decode::ros2_schemas::schema_text;
 use crate::error::{Error, Result};
-use crate::eval::clock::ClockCorrection;
 use crate::report::json::Report;
 use crate::sources::StampSource;
 use crate::trajectory::Trajectory;

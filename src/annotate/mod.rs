@@ -16,13 +16,13 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use crate::align::curvature::{curvature_signature, CurvatureSample};
+use crate::clock::ClockCorrection;
 use crate::decode::message_kind;
 use crate::error::{Error, Result};
-use crate::eval::clock::ClockCorrection;
 use crate::eval::config::{EvalConfig, TrajectoryInput};
 use crate::eval::inputs::Inputs;
+use crate::output::{AtomicFile, OutputGuard};
 use crate::report::json::{EstimateReport, Report};
-use crate::report::output::{AtomicFile, OutputGuard};
 use crate::sources::Progress;
 use crate::trajectory::Trajectory;
 use channels::{

@@ -14,7 +14,7 @@ use super::summary::{MissionResult, Summary, Timing, MISSION_KIND};
 use crate::annotate::annotate;
 use crate::error::{Error, Result};
 use crate::eval::evaluate_with_inputs;
-use crate::report::output::{write_output, OutputGuard};
+use crate::output::{write_output, OutputGuard};
 
 /// How to run a batch.
 #[derive(Debug, Clone)]

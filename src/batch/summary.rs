@@ -12,8 +12,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::metrics::stats::summarize;
+use crate::output::write_output;
 use crate::report::json::Report;
-use crate::report::output::write_output;
 
 /// Marks a per-mission result file.
 pub const MISSION_KIND: &str = "trajdrift.mission";

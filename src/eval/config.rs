@@ -387,7 +387,7 @@ impl EvalConfig {
     }
 
     /// Every file the evaluation reads: the recording, the text trajectories, KITTI times. Outputs are
-    /// checked against them ([`crate::report::output::OutputGuard`]).
+    /// checked against them ([`crate::output::OutputGuard`]).
     pub fn input_paths(&self) -> Vec<PathBuf> {
         let files = std::iter::once(&self.reference)
             .chain(&self.estimates)
@@ -404,8 +404,8 @@ impl EvalConfig {
     }
 
     /// The guard every output of this evaluation is checked with.
-    pub fn output_guard(&self) -> crate::report::output::OutputGuard {
-        crate::report::output::OutputGuard::new(self.input_paths())
+    pub fn output_guard(&self) -> crate::output::OutputGuard {
+        crate::output::OutputGuard::new(self.input_paths())
     }
 
     /// Refuses the outputs the library writes itself (`--export-aligned`, one file per estimate) when

@@ -1,17 +1,17 @@
 //! `--export-aligned`: writes each estimate as the Drift Error saw it — moved onto the reference clock
-//! by the report's clock correction ([`crate::eval::clock`]; and cropped like the reference) — as a TUM
+//! by the report's clock correction ([`crate::clock`]; and cropped like the reference) — as a TUM
 //! file, so that evo (or any TUM tool) can compare it with the reference without redoing the time
 //! alignment.
 //!
 //! With one estimate the file is written as given. With several, the estimate's name is inserted before
 //! the extension: `aligned.tum` → `aligned.lio.tum`, `aligned.odom.tum` (characters other than
 //! letters, digits, `-` and `_` in the name become `_`, so `estimate/odom` gives `aligned.estimate_odom.tum`).
-//! Written via a temporary file and a rename ([`crate::report::output::write_output`]).
+//! Written via a temporary file and a rename ([`crate::output::write_output`]).
 
 use std::path::{Path, PathBuf};
 
 use crate::error::Result;
-use crate::report::output::write_output;
+use crate::output::write_output;
 use crate::sources::tum::write_tum;
 use crate::trajectory::Trajectory;
 

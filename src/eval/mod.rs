@@ -1,7 +1,6 @@
 //! The evaluation job: load the trajectories, find each estimate's clock offset, compute its Drift
 //! Error at every window size, and assemble the report. Estimates are evaluated in parallel (rayon).
 
-pub mod clock;
 pub mod config;
 pub mod export;
 pub mod extrinsics;
@@ -19,6 +18,7 @@ use crate::align::clock_model::{clock_model_of, OffsetModel};
 use crate::align::time_offset::{
     estimate_time_offset_cached, OffsetEstimate, OffsetMethod, OffsetStatus, Pair, SignalCache,
 };
+use crate::clock::ClockCorrection;
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult};
 use crate::report::json::{
@@ -27,7 +27,6 @@ use crate::report::json::{
     TopicReport, WindowReport, SCHEMA_VERSION,
 };
 use crate::sources::{Progress, Warning};
-use clock::ClockCorrection;
 use config::EvalConfig;
 use inputs::{load, Inputs, Loaded};
 

@@ -19,7 +19,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::report::output::write_output;
+use crate::output::write_output;
 pub use mission::mission_figures;
 pub use style::PlotFormat;
 
@@ -136,15 +136,15 @@ impl PictureOutputs {
                 .iter()
                 .map(|f| f.svg())
                 .collect::<Result<Vec<_>>>()?;
-            let inline: Vec<crate::report::html::InlineFigure<'_>> = figures
+            let inline: Vec<crate::render::html::InlineFigure<'_>> = figures
                 .iter()
                 .zip(&svgs)
-                .map(|(f, s)| crate::report::html::InlineFigure {
+                .map(|(f, s)| crate::render::html::InlineFigure {
                     title: &f.title,
                     svg: s,
                 })
                 .collect();
-            let html = crate::report::html::render_report(report, &inline);
+            let html = crate::render::html::render_report(report, &inline);
             write_output(path, html.as_bytes())?;
             written.push(path.clone());
         }

@@ -8,7 +8,7 @@ use trajdrift::eval::evaluate_with_inputs;
 use trajdrift::eval::parameters::Parameters;
 use trajdrift::eval::preset::Preset;
 use trajdrift::plot::{PictureOutputs, PlotFormat};
-use trajdrift::report::table;
+use trajdrift::render::table;
 
 use crate::cli::args::{text_options, EvalArgs, PlotFormatArg};
 use crate::cli::progress::ReadProgress;

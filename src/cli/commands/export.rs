@@ -3,7 +3,7 @@
 
 use anyhow::{anyhow, Result};
 
-use trajdrift::report::output::OutputGuard;
+use trajdrift::output::OutputGuard;
 use trajdrift::sources::mapped_csv::write_csv;
 use trajdrift::sources::open::is_recording;
 use trajdrift::sources::text::TextSource;

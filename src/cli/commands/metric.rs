@@ -5,11 +5,11 @@ use anyhow::Result;
 
 use trajdrift::eval::config::{EvalConfig, NamedInput};
 use trajdrift::eval::preset::Preset;
-use trajdrift::metrics::standard::inputs::{EvoFormat, LoadedPair, MetricInputs};
 use trajdrift::metrics::standard::{
     Alignment, Metric, MetricResult, Pipeline, Plane, PoseRelation, SyncMethod,
 };
-use trajdrift::report::output::write_output;
+use trajdrift::output::write_output;
+use trajdrift::standard::inputs::{EvoFormat, LoadedPair, MetricInputs};
 
 use crate::cli::args::{text_options, MetricArgs};
 use crate::cli::{EXIT_OK, EXIT_WARNING};

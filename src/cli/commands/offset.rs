@@ -2,8 +2,8 @@
 
 use anyhow::Result;
 
-use trajdrift::metrics::standard::offsets::compare_offset_methods;
-use trajdrift::report::output::write_output;
+use trajdrift::output::write_output;
+use trajdrift::standard::offsets::compare_offset_methods;
 
 use crate::cli::args::OffsetArgs;
 use crate::cli::EXIT_OK;

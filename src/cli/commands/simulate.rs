@@ -3,7 +3,7 @@
 
 use anyhow::{anyhow, Result};
 
-use trajdrift::report::output::{write_output, AtomicFile};
+use trajdrift::output::{write_output, AtomicFile};
 use trajdrift::simulate::writer::{truth_json, write_mcap};
 use trajdrift::simulate::{default_route, route_of_duration, simulate, MissionConfig};
 

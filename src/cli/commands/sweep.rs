@@ -4,9 +4,9 @@
 use anyhow::{anyhow, Result};
 
 use trajdrift::eval::sweep::{parse_values, run_sweep, SweepParam};
+use trajdrift::output::write_output;
 use trajdrift::plot::sweep::SweepFigure;
 use trajdrift::plot::{Figure, FigureData, PlotFormat};
-use trajdrift::report::output::write_output;
 
 use crate::cli::args::{SweepArgs, SweepParamArg};
 use crate::cli::commands::eval::config_from_args;

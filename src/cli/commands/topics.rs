@@ -5,8 +5,8 @@ use std::fmt::Write;
 
 use anyhow::Result;
 
+use trajdrift::output::write_output;
 use trajdrift::report::escape::escape;
-use trajdrift::report::output::write_output;
 use trajdrift::sources::tf_frames::FramePair;
 use trajdrift::sources::{TopicInfo, Warning};
 

@@ -7,7 +7,7 @@ use std::borrow::Cow;
 /// `s` with every control character escaped; borrowed when there is none.
 ///
 /// ```
-/// use trajdrift::report::escape::escape;
+/// use trajdrift_core::report::escape::escape;
 /// assert_eq!(escape("/odom"), "/odom");
 /// assert_eq!(escape("a\nerror: b\x1b[31m"), "a\\nerror: b\\x1b[31m");
 /// ```

@@ -21,6 +21,7 @@ pub mod text;
 pub mod tf_chain;
 pub mod tf_frames;
 
+pub use crate::diag::Warning;
 use crate::error::Result;
 use crate::trajectory::Trajectory;
 
@@ -94,14 +95,6 @@ pub struct ExtractedTopic {
     pub rows: crate::trajectory::rows::RowAudit,
     /// The ENU origin used for a geodetic topic.
     pub geodetic_origin: Option<[f64; 3]>,
-}
-
-/// A warning the user must see (the CLI exits with code 3 when there is one).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Warning {
-    /// Stable machine-readable code, e.g. `truncated_recording`.
-    pub code: String,
-    pub message: String,
 }
 
 /// The result of one streaming pass over a source.

@@ -7,9 +7,7 @@
 pub mod ape;
 pub mod associate;
 pub mod in_eval;
-pub mod inputs;
 pub mod kitti_drift;
-pub mod offsets;
 pub mod poses;
 pub mod relation;
 pub mod rpe;

@@ -7,12 +7,14 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::{evaluate_with_offset, Alignment, Metric, Pipeline, PoseRelation, SyncMethod};
 use crate::align::auto_offset::auto_time_offset;
 use crate::align::auto_params::auto_params;
 use crate::align::time_offset::{estimate_time_offset, OffsetMethod, OffsetStatus};
 use crate::error::{Error, Result};
 use crate::eval::config::EvalConfig;
+use crate::metrics::standard::{
+    evaluate_with_offset, Alignment, Metric, Pipeline, PoseRelation, SyncMethod,
+};
 use crate::trajectory::Trajectory;
 
 /// One method's answer.

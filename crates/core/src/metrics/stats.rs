@@ -33,7 +33,7 @@ pub struct Summary {
 /// Summarizes `values`, ignoring non-finite ones. `None` when no finite value is left.
 ///
 /// ```
-/// use trajdrift::metrics::stats::summarize;
+/// use trajdrift_core::metrics::stats::summarize;
 /// let s = summarize(&[1.0, 2.0, 3.0, 4.0]).unwrap();
 /// assert_eq!(s.median, 2.5);
 /// assert_eq!(s.q1, 1.75); // numpy.quantile([1, 2, 3, 4], 0.25)

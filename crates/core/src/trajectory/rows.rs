@@ -47,7 +47,7 @@ impl RowAudit {
     /// `807 rows read, 4 dropped (4 duplicate stamp)`, or `None` when nothing happened worth saying.
     ///
     /// ```
-    /// use trajdrift::trajectory::rows::RowAudit;
+    /// use trajdrift_core::trajectory::rows::RowAudit;
     /// let a = RowAudit { read: 807, duplicate_stamp: 4, ..Default::default() };
     /// assert_eq!(a.describe().unwrap(), "807 rows read, 4 dropped (4 duplicate stamp)");
     /// ```

@@ -5,9 +5,9 @@
 
 use std::path::{Path, PathBuf};
 
-use super::poses::{Poses, Rotations, StampSeconds};
 use crate::error::{Error, Result};
 use crate::eval::config::{EvalConfig, NamedInput};
+use crate::metrics::standard::poses::{Poses, Rotations, StampSeconds};
 use crate::sources::euroc::read_euroc;
 use crate::sources::kitti::read_kitti_matrices;
 use crate::sources::text::{detect_format, TextFormat};
@@ -102,7 +102,7 @@ impl MetricInputs {
     }
 
     /// [`MetricInputs::load`]; TUM text files skip their orientation columns unless `orientation`
-    /// (see [`super::needs_orientation`]).
+    /// (see [`crate::metrics::standard::needs_orientation`]).
     pub fn load_with(&self, progress: Progress<'_>, orientation: bool) -> Result<LoadedPair> {
         match self {
             MetricInputs::Text {

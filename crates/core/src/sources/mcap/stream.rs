@@ -168,7 +168,7 @@ where
 /// streaming pass (extraction, topics, the annotated copy) starts. Chunk CRCs are checked; a record cannot
 /// be longer than the file, except one inside a compressed chunk, so the length limit keeps a corrupt
 /// length from allocating gigabytes before the read fails. Returns the file, the reader, the magic and the file's size.
-pub(crate) fn open_linear(path: &Path) -> Result<(std::fs::File, LinearReader, [u8; 8], u64)> {
+pub fn open_linear(path: &Path) -> Result<(std::fs::File, LinearReader, [u8; 8], u64)> {
     let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let file_size = file.metadata().map_err(|e| Error::io(path, e))?.len();
     let magic = read_magic(&mut file, path)?;
@@ -199,7 +199,7 @@ fn record_length_limit(file_size: u64) -> usize {
 /// but never more than the `left` bytes the file still holds (+1 to see its end): the reader's buffer
 /// is zero-filled to the requested size, so a damaged length must not size it. Returns the bytes read
 /// (0 at the end of the file).
-pub(crate) fn fill(
+pub fn fill(
     reader: &mut LinearReader,
     file: &mut std::fs::File,
     need: usize,

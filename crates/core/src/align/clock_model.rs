@@ -16,7 +16,7 @@
 //!
 //! Sign of the drift: `drift_ppm` is positive when the estimate's clock runs fast, so its Δt falls
 //! with time: Δt(t) = Δt(t_mid) − drift_ppm·10⁻⁶·(t − t_mid). The chosen model is applied to the
-//! estimate's stamps from the report's numbers by [`crate::eval::clock`].
+//! estimate's stamps from the report's numbers by [`crate::clock`].
 
 use crate::align::offset_profile::{OffsetProfile, ProfileWindow, SIGMA_FLOOR_S};
 use crate::align::time_offset::{Pair, SignalView};

@@ -128,7 +128,7 @@ pub fn formula_holds(ref_length_m: f64, heading_change_rad: f64, lever_m: f64) -
 /// α of a window under the fitted lever: L_ref/(L_ref − d·Δψ), or 1 where the formula breaks.
 ///
 /// ```
-/// use trajdrift::metrics::lever_fit::fit_alpha;
+/// use trajdrift_core::metrics::lever_fit::fit_alpha;
 /// // A 5 m window turning a quarter circle left, estimate 0.5 m to the left: its path is shorter.
 /// let a = fit_alpha(5.0, std::f64::consts::FRAC_PI_2, 0.5);
 /// assert!((a - 5.0 / (5.0 - 0.5 * std::f64::consts::FRAC_PI_2)).abs() < 1e-12);

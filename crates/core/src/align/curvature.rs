@@ -61,7 +61,7 @@ impl CurvatureSample {
 ///
 /// ```
 /// use nalgebra::Vector3;
-/// use trajdrift::align::curvature::{curvature_signature, CurvatureParams};
+/// use trajdrift_core::align::curvature::{curvature_signature, CurvatureParams};
 /// // A circle of radius 2 m sampled every 0.05 rad.
 /// let (t, p): (Vec<f64>, Vec<Vector3<f64>>) = (0..400)
 ///     .map(|i| { let a = i as f64 * 0.05; (i as f64 * 0.1, Vector3::new(2.0 * a.cos(), 2.0 * a.sin(), 0.0)) })

@@ -35,7 +35,7 @@ pub struct Tool {
 impl Default for Tool {
     fn default() -> Self {
         Tool {
-            name: env!("CARGO_PKG_NAME").into(),
+            name: "trajdrift".into(),
             version: env!("CARGO_PKG_VERSION").into(),
         }
     }

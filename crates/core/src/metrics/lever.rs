@@ -113,7 +113,7 @@ impl CurvatureTrack {
 /// α of one curvature segment from the two mean curvatures (1/m) and the expected lever arm `a` (m).
 ///
 /// ```
-/// use trajdrift::metrics::lever::segment_alpha;
+/// use trajdrift_core::metrics::lever::segment_alpha;
 /// // Concentric arcs of radius 4 m and 4.08 m: α = 4/4.08.
 /// assert!((segment_alpha(Some(0.25), Some(1.0 / 4.08), 0.1) - 4.0 / 4.08).abs() < 1e-12);
 /// // Radii 0.5 m apart with a = 0.1 m: not the same turn, no correction.
