@@ -3,7 +3,7 @@
 //! from the network; `sweep --param eps-min` shows the paper's shape and equals single `eval` runs;
 //! a 2-hour mission's figures stay small.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -4,7 +4,7 @@
 //! are seconds relative to the reference's first stamp. Unless a test says otherwise, path_eps = 1.0 m (the
 //! default: the fixtures' reference has 2 cm of noise, which inflates shorter chords, see de_table).
 
-mod common;
+use crate::common;
 
 use nalgebra::{Rotation3, Vector3};
 use proptest::prelude::*;

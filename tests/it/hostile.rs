@@ -2,8 +2,8 @@
 //! values out of range, damaged and truncated recordings, names with control characters, closed pipes,
 //! dropped rows, and a seeded mutation test of an MCAP and a bag under a 1 GB address-space limit.
 
-mod common;
-mod hostile_support;
+use crate::common;
+use crate::hostile_support;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -28,7 +28,7 @@ fn s(p: &Path) -> &str {
 }
 
 /// Writes the fuzz seeds (small recordings, messages, text files) into fuzz/corpus/. Run by hand:
-/// `cargo test --release --test hostile -- --ignored write_fuzz_seeds`.
+/// `cargo test --release --test it -- --ignored hostile::write_fuzz_seeds`.
 #[test]
 #[ignore]
 fn write_fuzz_seeds() {
@@ -633,7 +633,7 @@ fn run_mutants(kind: &str) {
     let mut c = Command::new(exe);
     c.args([
         "--exact",
-        "mutation_child",
+        "hostile::mutation_child",
         "--nocapture",
         "--test-threads",
         "1",

@@ -2,7 +2,7 @@
 //! missions through `eval::evaluate` with all defaults, the clock drift, and one test per failure
 //! mode of the curvature methods (noise vs ε, the Δx/v lead, unsigned κ's false confidence).
 
-mod common;
+use crate::common;
 
 use trajdrift::align::auto_offset::{auto_time_offset, Verdict};
 use trajdrift::align::auto_params::auto_params;
@@ -19,7 +19,7 @@ use trajdrift::simulate::{default_route, simulate, Mission, MissionConfig};
 use common::{load, mission, shared, truth, MISSIONS};
 
 /// Every method × mission × (ε, Δt_max). Run with
-/// `TRAJDRIFT_SHARED=/work/shared cargo test --release --test time_offset_auto -- --ignored --nocapture eps_table`.
+/// `TRAJDRIFT_SHARED=/work/shared cargo test --release --test it -- --ignored --nocapture time_offset_auto::eps_table`.
 #[test]
 #[ignore]
 fn eps_table() {
@@ -274,7 +274,7 @@ fn unsigned_curvature_on_noise_is_not_confident() {
 }
 
 /// Every method × mission through `evaluate` with all defaults. Run with
-/// `TRAJDRIFT_SHARED=/work/shared cargo test --release --test time_offset_auto -- --ignored --nocapture auto_table`.
+/// `TRAJDRIFT_SHARED=/work/shared cargo test --release --test it -- --ignored --nocapture time_offset_auto::auto_table`.
 #[test]
 #[ignore]
 fn auto_table() {

@@ -1,7 +1,7 @@
 //! TF chains (`/tf:PARENT:CHILD`) and `tf-static:` levers, on data written by other tools (the shared
 //! fixtures, evo's nav2 turtlebot MCAP) and on small recordings written here with the mcap crate.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

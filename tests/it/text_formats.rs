@@ -2,7 +2,7 @@
 //! row count of its file (REFERENCE.md), the format is picked from the file alone, and a CSV mapping
 //! that names a missing column fails with a one-line error.
 
-mod common;
+use crate::common;
 
 use trajdrift::sources::mapped_csv::CsvMapping;
 use trajdrift::sources::text::{detect_format, read_text, TextFormat, TextOptions};

@@ -1,7 +1,7 @@
 //! Issue 10 (clock offsets over time): the README fixture's bias, the offset profile and its σ, the
 //! model chosen from it (constant / linear / piecewise), on simulated missions with a known clock.
 
-mod common;
+use crate::common;
 
 use nalgebra::Vector3;
 use trajdrift::align::auto_offset::auto_time_offset;
@@ -349,7 +349,7 @@ fn coverage_missions() -> Vec<(String, MissionConfig, Vec<Segment>)> {
 
 /// Acceptance (honest σ): over 24 simulated constant-offset missions, |Δt − truth| ≤ 2σ in ≥ 85 % of
 /// them with a median σ ≤ 10 ms, and the same coverage for the profile's usable windows. Prints the
-/// table: `cargo test --release --test time_offset_profile -- --nocapture coverage_table`.
+/// table: `cargo test --release --test it -- --nocapture time_offset_profile::coverage_table`.
 #[test]
 fn coverage_table() {
     let mut covered = 0;
@@ -555,7 +555,7 @@ fn real_recordings_are_constant() {
 /// after it before issue 10 (the clock drift's 2 thirds × (1 + 16 noise-injected) searches over ±2 s,
 /// replayed here with the same parameters) against the profile and model that replace it. Both run
 /// in this process, under the same load. Run with
-/// `cargo test --release --test time_offset_profile -- --ignored --nocapture offset_stage_timing`.
+/// `cargo test --release --test it -- --ignored --nocapture time_offset_profile::offset_stage_timing`.
 #[test]
 #[ignore]
 fn offset_stage_timing() {

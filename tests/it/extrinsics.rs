@@ -2,7 +2,7 @@
 //! point removes the Δx/v bias of curvature-based time alignment; moving a position-only trajectory is
 //! refused.
 
-mod common;
+use crate::common;
 
 use trajdrift::eval::config::{EvalConfig, NamedInput};
 use trajdrift::eval::evaluate;

@@ -2,7 +2,7 @@
 //! run with `trajdrift` in place of `evo_`, at the process boundary, and its seven statistics must equal
 //! evo's six printed decimals. Then the one-line errors of the standard metrics.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -2,7 +2,7 @@
 //! definition, the curvature method on analytic trajectories, and both methods on the five simulated
 //! missions of ../shared/fixtures against their truth.json.
 
-mod common;
+use crate::common;
 
 use std::time::Instant;
 
@@ -347,7 +347,7 @@ fn table_params(eps_m: f64, dt_max_s: f64) -> OffsetParams {
 }
 
 /// The table of both methods × five missions. Run with
-/// `TRAJDRIFT_SHARED=/work/shared cargo test --release --test time_offset -- --ignored --nocapture offset_table`.
+/// `TRAJDRIFT_SHARED=/work/shared cargo test --release --test it -- --ignored --nocapture time_offset::offset_table`.
 #[test]
 #[ignore]
 fn offset_table() {
@@ -400,7 +400,7 @@ fn offset_table() {
 }
 
 /// The speed method's design choices (window, mean removal) measured on the five missions. Run with
-/// `cargo test --release --test time_offset -- --ignored --nocapture speed_variants`.
+/// `cargo test --release --test it -- --ignored --nocapture time_offset::speed_variants`.
 #[test]
 #[ignore]
 fn speed_variants() {

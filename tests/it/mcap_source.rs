@@ -1,7 +1,7 @@
 //! The streaming MCAP source against the shared simulated missions (written by Python's `mcap` and
 //! `rosbags`, not by us) and against small files written here with `mcap::Writer` in every layout.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -4,7 +4,7 @@
 //! (the table: trajdrift at f2e5065, `eval MISSION --reference /reference/position --estimate
 //! /estimate/odom --json`, all defaults).
 
-mod common;
+use crate::common;
 
 use trajdrift::eval::config::{EvalConfig, NamedInput};
 use trajdrift::eval::evaluate;

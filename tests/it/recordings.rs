@@ -1,7 +1,7 @@
 //! Every recording format gives the same trajectories: MCAP, ROS 1 bags (none/bz2/lz4 chunks),
 //! ROS 1 in MCAP, rosbag2 folders (mcap and sqlite3), plus the evo data counts and the errors.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

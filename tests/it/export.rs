@@ -1,6 +1,6 @@
 //! `trajdrift export` writes a topic as text that the text readers take back unchanged.
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

@@ -2,7 +2,7 @@
 //! whatever `--jobs`, the broken mission reported while the others are done, shards merged equal to
 //! one run, `--skip-existing` resumes.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -2,7 +2,7 @@
 //! sample counts, the speed method's offset, the Drift Error median, rotation in place excluded, and
 //! invariance to a rigid transform of the estimate.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

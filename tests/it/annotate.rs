@@ -2,7 +2,7 @@
 //! (same ids, bytes and times, attachments and metadata) and adds the trajdrift channels with the right
 //! counts, the aligned stamps shifted by exactly Δt_ns = round(Δt × 10⁹).
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -2,7 +2,7 @@
 //! (chunked or not, indexes, statistics, summary offsets, repeated schemas/channels, padding), the
 //! reading path the product uses finds every channel and every message, in file order.
 
-mod common;
+use crate::common;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;

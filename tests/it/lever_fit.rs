@@ -2,7 +2,7 @@
 //! whole evaluation (mission.mcap, /reference/position vs /estimate/odom, path ε 1 m, speed offset), and
 //! `--export-aligned`.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 
