@@ -30,7 +30,7 @@ fn main() {
             NamedInput::topic("/reference/position"),
             vec![NamedInput::topic("/estimate/odom")],
         );
-        c.windows_m = vec![1.0, 5.0, 10.0, 20.0];
+        c.params.window = Some(vec![1.0, 5.0, 10.0, 20.0]);
         let reps = 3;
         let start = Instant::now();
         for _ in 0..reps {
@@ -62,7 +62,7 @@ fn long_mission() {
         NamedInput::topic("/reference/position"),
         vec![NamedInput::topic("/estimate/odom")],
     );
-    c.windows_m = vec![1.0, 5.0, 10.0, 20.0];
+    c.params.window = Some(vec![1.0, 5.0, 10.0, 20.0]);
     let start = Instant::now();
     match evaluate(&c, &|_| {}) {
         Ok(r) => {

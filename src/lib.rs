@@ -6,7 +6,8 @@
 //! core crate [`trajdrift_core`], re-exported here.
 
 pub use trajdrift_core::{
-    align, clock, decode, diag, error, metrics, output, report, simulate, sources, trajectory,
+    align, clock, decode, diag, error, metrics, output, params, report, simulate, sources,
+    trajectory,
 };
 pub use trajdrift_core::{Error, Result, Trajectory};
 

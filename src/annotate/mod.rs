@@ -254,7 +254,7 @@ fn plan(config: &EvalConfig, report: &Report, inputs: &Inputs) -> Plan {
         reference_curvature: curvature_messages(&inputs.reference.trajectory, config),
         estimates,
         report: report.clone(),
-        stamp: config.stamp,
+        stamp: config.params.stamp(),
     }
 }
 

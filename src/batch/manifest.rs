@@ -245,8 +245,8 @@ fn mission_config(
             (c, Parameters::default())
         }
     };
-    Parameters::layered(std::iter::once(&preset_parameters).chain(layers.iter().copied()))
-        .apply(&mut config)?;
+    config.params =
+        Parameters::layered(std::iter::once(&preset_parameters).chain(layers.iter().copied()));
     Ok(config)
 }
 
@@ -290,11 +290,11 @@ window = [2]
         .unwrap();
         let m = Manifest::from_toml(&p, &Parameters::default()).unwrap();
         assert_eq!(m.missions[0].name, "mission");
-        assert_eq!(m.missions[0].config.windows_m, vec![5.0, 10.0]);
+        assert_eq!(m.missions[0].config.params.windows_m(), vec![5.0, 10.0]);
         assert_eq!(m.missions[0].config.estimates[1].name, "pose");
-        assert_eq!(m.missions[1].config.time_offset_s, Some(-0.25));
-        assert_eq!(m.missions[1].config.windows_m, vec![2.0]);
-        assert_eq!(m.missions[1].config.platform, Platform::Wheeled);
+        assert_eq!(m.missions[1].config.params.time_offset, Some(-0.25));
+        assert_eq!(m.missions[1].config.params.windows_m(), vec![2.0]);
+        assert_eq!(m.missions[1].config.params.platform(), Platform::Wheeled);
         assert_eq!(
             m.missions[0].config.recording.as_deref(),
             Some(dir.path().join("a/mission.mcap").as_path())

@@ -4,7 +4,8 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use trajdrift::eval::parameters::{positive, triple, word, Parameters};
+use trajdrift::eval::parameters::{positive, word, ParameterFlags};
+use trajdrift::params::triple;
 use trajdrift::sources::StampSource;
 
 /// Evaluate robot trajectories from positions alone: curvature-based time alignment and Drift Error.
@@ -87,7 +88,7 @@ pub struct EvalArgs {
     #[arg(long, value_name = "[NAME=]FILE")]
     pub estimate_file: Vec<String>,
     #[command(flatten)]
-    pub params: Parameters,
+    pub params: ParameterFlags,
     /// Write the JSON report to FILE (`-` = stdout).
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
@@ -252,7 +253,7 @@ pub struct BatchArgs {
     pub preset: Option<String>,
     /// Evaluation parameters for every mission, over the manifest's and the preset's.
     #[command(flatten)]
-    pub params: Parameters,
+    pub params: ParameterFlags,
     /// Output folder: <mission>.json, <mission>.mcap, summary.{json,csv,md}.
     #[arg(long, value_name = "DIR", default_value = "trajdrift-batch")]
     pub out: PathBuf,

@@ -1,51 +1,17 @@
-//! What an evaluation is asked to do: inputs and parameters, with the paper's defaults and the rules
-//! that turn user flags into the numbers the methods use.
+//! What an evaluation is asked to do: its inputs, and its [`Parameters`] (defined once, with their
+//! defaults and ranges, in the core's parameter table), with the rules that turn them into the
+//! numbers the methods use.
 
 use std::path::PathBuf;
 
-use crate::align::auto_params::AutoParams;
+use crate::align::auto_params::{auto_params, AutoParams};
 use crate::align::curvature::CurvatureParams;
-use crate::align::time_offset::{OffsetMethod, OffsetParams};
+use crate::align::time_offset::OffsetParams;
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::DriftParams;
-use crate::metrics::lever::LeverCorrection;
+use crate::params::LEVER_RANGE;
+pub use crate::params::{Parameters, Platform};
 use crate::sources::text::TextOptions;
-use crate::sources::StampSource;
-
-/// The kind of robot: it sets the paper's default ε_min (about 3σ of the reference noise it expects),
-/// or `Auto`: ε and the curvature Δt_max chosen from the reference's measured noise and speed
-/// ([`crate::align::auto_params`]), the default.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Platform {
-    /// Legged robots: ε_min 0.1 m.
-    Legged,
-    /// Wheeled robots: ε_min 0.3 m.
-    Wheeled,
-    /// Parameters from the data (the default): see [`EvalConfig::resolved`].
-    #[default]
-    Auto,
-}
-
-impl Platform {
-    /// The paper's ε_min for this platform, metres.
-    pub fn eps_min_m(self) -> f64 {
-        match self {
-            Platform::Legged => 0.1,
-            Platform::Wheeled => 0.3,
-            // Only a fallback: `evaluate` replaces it with the value measured on the reference.
-            Platform::Auto => 0.1,
-        }
-    }
-
-    /// Name as written in reports.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Platform::Legged => "legged",
-            Platform::Wheeled => "wheeled",
-            Platform::Auto => "auto",
-        }
-    }
-}
 
 /// Where one trajectory comes from.
 #[derive(Debug, Clone, PartialEq)]
@@ -182,31 +148,11 @@ pub struct EvalConfig {
     pub more_recordings: Vec<PathBuf>,
     pub reference: NamedInput,
     pub estimates: Vec<NamedInput>,
-    pub stamp: StampSource,
-    pub origin: Option<[f64; 3]>,
-    pub platform: Platform,
-    /// `--eps-min`: sets both ε (the paper's reading).
-    pub eps_min_m: Option<f64>,
-    pub curvature_eps_m: Option<f64>,
-    pub path_eps_m: Option<f64>,
-    pub theta_max_rad: f64,
-    pub dt_max_s: f64,
-    pub windows_m: Vec<f64>,
-    pub overlap: f64,
-    pub lever_correction: LeverCorrection,
-    pub lever_arm_m: f64,
-    pub offset_method: OffsetMethod,
-    pub max_offset_s: f64,
-    pub grid_s: f64,
-    /// Skip the search and apply this offset.
-    pub time_offset_s: Option<f64>,
-    /// Crop on the reference clock: absolute epoch seconds, or seconds from the reference's first
-    /// sample when below 1e8 (no recording is that close to 1970).
-    pub t_start: Option<f64>,
-    pub t_end: Option<f64>,
-    /// Δt_max of the curvature signatures (time offset and the lever-arm radii), seconds; `None`:
-    /// `dt_max_s` with a platform, measured with `Platform::Auto`. `dt_max_s` stays the bound on gaps
-    /// and standstills.
+    /// Every evaluation parameter (unset ones keep their defaults).
+    pub params: Parameters,
+    /// Δt_max of the curvature signatures (time offset and the lever-arm radii), seconds, once
+    /// measured on the reference with `Platform::Auto` ([`Self::resolved`]); `None`: `dt_max` when
+    /// given or with a platform. Not a parameter: `dt_max` stays the bound on gaps and standstills.
     pub curvature_dt_max_s: Option<f64>,
     /// `--export-aligned FILE`: write each estimate, shifted onto the reference clock, as TUM
     /// (see [`super::export::aligned_path`] for the names with several estimates).
@@ -219,20 +165,13 @@ pub struct EvalConfig {
     /// `--estimate-lever [NAME=]X,Y,Z|tf-static:[BODY:]FRAME`: estimate sensors relative to the common
     /// body point; `None` as name applies to every estimate without a named one.
     pub estimate_levers: Vec<(Option<String>, LeverSpec)>,
-    /// `--metrics de,ape,rpe,kitti`: which metrics each estimate gets (evo's APE/RPE on the
-    /// time-aligned estimate beside Drift Error).
-    pub metrics: crate::metrics::standard::in_eval::MetricSet,
-    /// `--offset-model`: the clock model fitted to the offset profile; `None`: chosen from it.
-    pub offset_model: Option<crate::align::clock_model::OffsetModel>,
-    /// `--offset-window`/`--offset-step` of the offset profile (`None`: from the data).
-    pub offset_profile: crate::align::offset_profile::ProfileParams,
     /// Keep the estimates' orientations even when no metric reads them (an output that writes
     /// poses: the annotated recording). Not a user parameter: set by the command that writes.
     pub keep_orientations: bool,
 }
 
 impl EvalConfig {
-    /// A request with the paper's defaults for `reference` and `estimates`.
+    /// A request with every parameter at its default for `reference` and `estimates`.
     pub fn new(
         recording: Option<PathBuf>,
         reference: NamedInput,
@@ -243,32 +182,12 @@ impl EvalConfig {
             more_recordings: Vec::new(),
             reference,
             estimates,
-            stamp: StampSource::Header,
-            origin: None,
-            platform: Platform::Auto,
-            eps_min_m: None,
-            curvature_eps_m: None,
-            path_eps_m: None,
-            theta_max_rad: std::f64::consts::FRAC_PI_2,
-            dt_max_s: 2.0,
-            windows_m: vec![5.0],
-            overlap: 0.0,
-            lever_correction: LeverCorrection::Fit,
-            lever_arm_m: 0.1,
-            offset_method: OffsetMethod::Auto,
-            max_offset_s: 30.0,
-            grid_s: 0.001,
-            time_offset_s: None,
-            t_start: None,
-            t_end: None,
+            params: Parameters::default(),
             curvature_dt_max_s: None,
             export_aligned: None,
             text: TextOptions::default(),
             reference_lever: None,
             estimate_levers: Vec::new(),
-            metrics: Default::default(),
-            offset_model: None,
-            offset_profile: Default::default(),
             keep_orientations: false,
         }
     }
@@ -282,28 +201,36 @@ impl EvalConfig {
             .collect()
     }
 
-    /// Whether any parameter is left to be measured on the reference (`Platform::Auto` and not
-    /// given).
-    pub fn needs_auto(&self) -> bool {
-        self.platform == Platform::Auto
-            && (self.curvature_eps_m.or(self.eps_min_m).is_none()
-                || self.path_eps_m.or(self.eps_min_m).is_none()
-                || self.curvature_dt_max_s.is_none())
+    /// Whether parameters are left to be measured on the reference.
+    fn measures(&self) -> bool {
+        self.params.platform() == Platform::Auto
     }
 
-    /// Names of the parameters `resolved` takes from `auto` (those not given).
+    /// What `--platform auto` measures on the reference (`t` seconds, its positions): its noise and
+    /// speed, and the parameters they give.
+    pub fn measure(&self, t: &[f64], positions: &[nalgebra::Vector3<f64>]) -> AutoParams {
+        let min_window_m = self
+            .params
+            .windows_m()
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+        auto_params(t, positions, min_window_m, self.params.dt_max_s())
+    }
+
+    /// Names of the parameters `resolved` takes from the data (those not given).
     pub fn auto_parameter_names(&self) -> Vec<String> {
-        if self.platform != Platform::Auto {
+        if !self.measures() {
             return Vec::new();
         }
+        let p = &self.params;
         let mut v = Vec::new();
-        if self.curvature_eps_m.or(self.eps_min_m).is_none() {
+        if p.curvature_eps.or(p.eps_min).is_none() {
             v.push("curvature_eps_m".to_string());
         }
-        if self.path_eps_m.or(self.eps_min_m).is_none() {
+        if p.path_eps.or(p.eps_min).is_none() {
             v.push("path_eps_m".to_string());
         }
-        if self.curvature_dt_max_s.is_none() {
+        if p.dt_max.is_none() {
             v.push("curvature_dt_max_s".to_string());
         }
         v
@@ -313,51 +240,44 @@ impl EvalConfig {
     /// are kept as given).
     pub fn resolved(&self, auto: &AutoParams) -> EvalConfig {
         let mut c = self.clone();
-        if self.platform != Platform::Auto {
+        if !self.measures() {
             return c;
         }
-        if c.curvature_eps_m.or(c.eps_min_m).is_none() {
-            c.curvature_eps_m = Some(auto.curvature_eps_m);
+        let p = &mut c.params;
+        if p.curvature_eps.or(p.eps_min).is_none() {
+            p.curvature_eps = Some(auto.curvature_eps_m);
         }
-        if c.path_eps_m.or(c.eps_min_m).is_none() {
-            c.path_eps_m = Some(auto.path_eps_m);
+        if p.path_eps.or(p.eps_min).is_none() {
+            p.path_eps = Some(auto.path_eps_m);
         }
-        if c.curvature_dt_max_s.is_none() {
+        if p.dt_max.is_none() {
             c.curvature_dt_max_s = Some(auto.curvature_dt_max_s);
         }
         c
     }
 
-    /// ε for curvature: `--curvature-eps`, else `--eps-min`, else the platform's.
-    pub fn curvature_eps(&self) -> f64 {
-        self.curvature_eps_m
-            .or(self.eps_min_m)
-            .unwrap_or(self.platform.eps_min_m())
-    }
-
-    /// ε for path lengths: `--path-eps`, else `--eps-min`, else the platform's.
-    pub fn path_eps(&self) -> f64 {
-        self.path_eps_m
-            .or(self.eps_min_m)
-            .unwrap_or(self.platform.eps_min_m())
+    /// Δt_max of the curvature signatures: measured, else `dt_max`.
+    pub fn curvature_dt_max(&self) -> f64 {
+        self.curvature_dt_max_s
+            .unwrap_or_else(|| self.params.dt_max_s())
     }
 
     /// Eq. (1)'s parameters.
     pub fn curvature_params(&self) -> CurvatureParams {
         CurvatureParams {
-            eps_m: self.curvature_eps(),
-            theta_max_rad: self.theta_max_rad,
-            dt_max_s: self.curvature_dt_max_s.unwrap_or(self.dt_max_s),
+            eps_m: self.params.curvature_eps_m(),
+            theta_max_rad: self.params.theta_max_rad(),
+            dt_max_s: self.curvature_dt_max(),
         }
     }
 
     /// The time-offset search's parameters.
     pub fn offset_params(&self) -> OffsetParams {
         OffsetParams {
-            max_offset_s: self.max_offset_s,
-            grid_s: self.grid_s,
+            max_offset_s: self.params.max_offset_s(),
+            grid_s: self.params.grid_s(),
             curvature: self.curvature_params(),
-            max_gap_s: Some(self.dt_max_s),
+            max_gap_s: Some(self.params.dt_max_s()),
             ..OffsetParams::default()
         }
     }
@@ -366,11 +286,11 @@ impl EvalConfig {
     pub fn drift_params(&self, window_m: f64) -> DriftParams {
         DriftParams {
             window_m,
-            overlap: self.overlap,
-            path_eps_m: self.path_eps(),
-            dt_max_s: self.dt_max_s,
-            lever_correction: self.lever_correction,
-            lever_arm_m: self.lever_arm_m,
+            overlap: self.params.overlap(),
+            path_eps_m: self.params.path_eps_m(),
+            dt_max_s: self.params.dt_max_s(),
+            lever_correction: self.params.lever_correction(),
+            lever_arm_m: self.params.lever_arm_m(),
             curvature: self.curvature_params(),
         }
     }
@@ -442,14 +362,14 @@ impl EvalConfig {
                 w[0]
             ));
         }
-        // Every numeric value against the one parameter table (flag, value and range in the refusal).
-        super::params::validate(self)?;
-        if self.windows_m.is_empty() {
-            return bad("--window needs at least one size in metres".into());
-        }
-        if let (Some(a), Some(b)) = (self.t_start, self.t_end) {
-            if a >= b {
-                return bad(format!("--t-start ({a}) must be before --t-end ({b})"));
+        // Every value against the one parameter table (flag, value and range in the refusal).
+        self.params.validate()?;
+        let levers = self.estimate_levers.iter().map(|(_, l)| l);
+        for l in levers.chain(self.reference_lever.as_ref()) {
+            if let LeverSpec::Offset(v) = l {
+                for &x in v.iter() {
+                    LEVER_RANGE.check("--reference-lever/--estimate-lever", x)?;
+                }
             }
         }
         for (n, _) in &self.estimate_levers {
@@ -492,12 +412,15 @@ mod tests {
             NamedInput::file("r.tum"),
             vec![NamedInput::file("e.tum")],
         );
-        c.platform = Platform::Legged;
-        assert_eq!(c.curvature_eps(), 0.1);
-        c.platform = Platform::Wheeled;
-        assert_eq!(c.path_eps(), 0.3);
-        c.eps_min_m = Some(1.0);
-        c.path_eps_m = Some(0.5);
-        assert_eq!((c.curvature_eps(), c.path_eps()), (1.0, 0.5));
+        c.params.platform = Some(Platform::Legged);
+        assert_eq!(c.params.curvature_eps_m(), 0.1);
+        c.params.platform = Some(Platform::Wheeled);
+        assert_eq!(c.params.path_eps_m(), 0.3);
+        c.params.eps_min = Some(1.0);
+        c.params.path_eps = Some(0.5);
+        assert_eq!(
+            (c.params.curvature_eps_m(), c.params.path_eps_m()),
+            (1.0, 0.5)
+        );
     }
 }

@@ -56,7 +56,8 @@ fn positions_only(config: &EvalConfig, source: &dyn crate::sources::Source) -> V
             .is_none_or(|k| k.has_orientation()),
         TrajectoryInput::TumFile(_) => true,
     };
-    let read_by_metrics = (config.metrics.rpe || config.metrics.kitti) && reference_oriented;
+    let read_by_metrics =
+        (config.params.metric_set().rpe || config.params.metric_set().kitti) && reference_oriented;
     if needed_elsewhere || read_by_metrics {
         return Vec::new();
     }
@@ -117,8 +118,8 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
                 let mut unique = topics.clone();
                 unique.dedup();
                 let options = ExtractOptions {
-                    stamp: config.stamp,
-                    origin: config.origin,
+                    stamp: config.params.stamp(),
+                    origin: config.params.origin,
                     static_lookups: lookups.clone(),
                     positions_only: positions_only(config, source.as_ref()),
                 };

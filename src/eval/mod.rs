@@ -6,14 +6,12 @@ pub mod export;
 pub mod extrinsics;
 pub mod inputs;
 pub mod parameters;
-pub mod params;
 pub mod preset;
 pub mod sweep;
 
 use rayon::prelude::*;
 
 use crate::align::auto_offset::auto_time_offset_of;
-use crate::align::auto_params::auto_params;
 use crate::align::clock_model::{clock_model_of, OffsetModel};
 use crate::align::time_offset::{
     estimate_time_offset_cached, OffsetEstimate, OffsetMethod, OffsetStatus, Pair, SignalCache,
@@ -21,6 +19,7 @@ use crate::align::time_offset::{
 use crate::clock::ClockCorrection;
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult};
+use crate::params::Word;
 use crate::report::json::{
     AutoParameters, DriftErrorReport, EstimateReport, Input, OffsetMethodReport,
     OffsetProfilePoint, OffsetSegmentReport, Parameters, Report, TimeOffsetReport, Tool,
@@ -76,31 +75,25 @@ pub fn evaluate_loaded(config: &EvalConfig, mut inputs: Inputs) -> Result<(Repor
             }
         })
     };
-    let (crop_start, crop_end) = (crop(config.t_start), crop(config.t_end));
+    let (crop_start, crop_end) = (crop(config.params.t_start), crop(config.params.t_end));
     reference.trajectory.crop(crop_start, crop_end);
     require_samples(&inputs.path, reference)?;
     let reference = &inputs.reference;
     for e in &inputs.estimates {
         require_samples(&inputs.path, e)?;
     }
-    if config.time_offset_s.is_none() {
-        params::check_search_size(config.max_offset_s, config.grid_s, data_span_s(&inputs))?;
+    if config.params.time_offset.is_none() {
+        crate::params::check_search_size(
+            config.params.max_offset_s(),
+            config.params.grid_s(),
+            data_span_s(&inputs),
+        )?;
     }
     // `--platform auto`: ε and the curvature Δt_max from the reference's own noise and speed.
-    let auto = {
-        let t = reference.trajectory.times_s(t0_ns);
-        let min_window = config
-            .windows_m
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min);
-        auto_params(
-            &t,
-            &reference.trajectory.positions,
-            min_window,
-            config.dt_max_s,
-        )
-    };
+    let auto = config.measure(
+        &reference.trajectory.times_s(t0_ns),
+        &reference.trajectory.positions,
+    );
     let auto_names = config.auto_parameter_names();
     let resolved = config.resolved(&auto);
     let config = &resolved;
@@ -138,24 +131,24 @@ pub fn evaluate_loaded(config: &EvalConfig, mut inputs: Inputs) -> Result<(Repor
             bytes: inputs.bytes,
         },
         parameters: Parameters {
-            platform: config.platform.as_str().into(),
-            curvature_eps_m: config.curvature_eps(),
-            path_eps_m: config.path_eps(),
-            theta_max_rad: config.theta_max_rad,
-            dt_max_s: config.dt_max_s,
-            windows_m: config.windows_m.clone(),
-            overlap: config.overlap,
-            lever_arm_m: config.lever_arm_m,
-            lever_correction: config.lever_correction.as_str().into(),
-            max_offset_s: config.max_offset_s,
-            grid_s: config.grid_s,
-            offset_method: config.offset_method.as_str().into(),
-            time_offset_s: config.time_offset_s,
-            stamp: match config.stamp {
+            platform: config.params.platform().word().into(),
+            curvature_eps_m: config.params.curvature_eps_m(),
+            path_eps_m: config.params.path_eps_m(),
+            theta_max_rad: config.params.theta_max_rad(),
+            dt_max_s: config.params.dt_max_s(),
+            windows_m: config.params.windows_m().clone(),
+            overlap: config.params.overlap(),
+            lever_arm_m: config.params.lever_arm_m(),
+            lever_correction: config.params.lever_correction().as_str().into(),
+            max_offset_s: config.params.max_offset_s(),
+            grid_s: config.params.grid_s(),
+            offset_method: config.params.offset_method().as_str().into(),
+            time_offset_s: config.params.time_offset,
+            stamp: match config.params.stamp() {
                 crate::sources::StampSource::Header => "header".into(),
                 crate::sources::StampSource::Log => "log".into(),
             },
-            origin: config.origin,
+            origin: config.params.origin,
             t_start: to_s(crop_start),
             t_end: to_s(crop_end),
             curvature_dt_max_s: config.curvature_dt_max_s,
@@ -239,7 +232,7 @@ fn evaluate_estimate(
     let est_p = &est.trajectory.positions;
     let mut warnings = Vec::new();
 
-    let time_offset = match config.time_offset_s {
+    let time_offset = match config.params.time_offset {
         Some(dt) => TimeOffsetReport {
             method: "given".into(),
             offset_s: dt,
@@ -256,7 +249,7 @@ fn evaluate_estimate(
             let pair = Pair::new((&ref_t, ref_p), (&est_t, est_p), &cache);
             let params = config.offset_params();
             // `auto` runs every method; a named method runs alone (only what it needs is computed).
-            let auto = if config.offset_method == OffsetMethod::Auto {
+            let auto = if config.params.offset_method() == OffsetMethod::Auto {
                 Some(match auto_time_offset_of(&pair, &params) {
                     Ok(a) => a,
                     Err(e @ Error::NoOverlap { .. }) => {
@@ -270,8 +263,13 @@ fn evaluate_estimate(
             let single: Vec<(OffsetMethod, Result<OffsetEstimate>)> = match auto {
                 Some(_) => Vec::new(),
                 None => vec![(
-                    config.offset_method,
-                    estimate_time_offset_cached(config.offset_method, &pair, &params, (&[], &[])),
+                    config.params.offset_method(),
+                    estimate_time_offset_cached(
+                        config.params.offset_method(),
+                        &pair,
+                        &params,
+                        (&[], &[]),
+                    ),
                 )],
             };
             let runs = auto.as_ref().map_or(&single, |a| &a.runs);
@@ -291,7 +289,7 @@ fn evaluate_estimate(
                 }
                 None => (
                     single.first().map(|(_, r)| r.as_ref().map(|o| *o)),
-                    format!("--offset-method {}", config.offset_method.as_str()),
+                    format!("--offset-method {}", config.params.offset_method().as_str()),
                     None,
                 ),
             };
@@ -323,9 +321,9 @@ fn evaluate_estimate(
                             Some(o.correlation),
                             Some(o.confidence),
                         ),
-                        _ => (config.offset_method.as_str(), 0.0, None, None),
+                        _ => (config.params.offset_method().as_str(), 0.0, None, None),
                     };
-                    let hint = if config.offset_method == OffsetMethod::Auto {
+                    let hint = if config.params.offset_method() == OffsetMethod::Auto {
                         format!("{}. Check the overlap or give --time-offset", reason)
                     } else {
                         "Check the overlap, try --offset-method auto or give --time-offset".into()
@@ -374,15 +372,15 @@ fn evaluate_estimate(
         });
     }
     let t0_s = t0_ns as f64 * 1e-9;
-    let params = config.drift_params(config.windows_m[0]);
-    let drift = if config.metrics.de {
+    let params = config.drift_params(config.params.windows_m()[0]);
+    let drift = if config.params.metric_set().de {
         drift_error_windows(
             &ref_t,
             ref_p,
             &aligned_t,
             &aligned.positions,
             &params,
-            &config.windows_m,
+            &config.params.windows_m(),
         )
         .map_err(|e| relabel(e, &est.label))?
         .iter()
@@ -399,11 +397,11 @@ fn evaluate_estimate(
         )?;
     }
     // Last: the metrics take the aligned estimate whole (no copy of it).
-    let standard_metrics = config.metrics.any_standard().then(|| {
+    let standard_metrics = config.params.metric_set().any_standard().then(|| {
         crate::metrics::standard::in_eval::standard_metrics(
             &reference.trajectory,
             aligned,
-            &config.metrics,
+            &config.params.metric_set(),
         )
     });
     Ok((
@@ -509,7 +507,13 @@ fn over_time(
     t0_ns: i64,
 ) -> (TimeOffsetReport, Vec<Warning>) {
     let t0_s = t0_ns as f64 * 1e-9;
-    let found = clock_model_of(pair, params, o, &config.offset_profile, config.offset_model);
+    let found = clock_model_of(
+        pair,
+        params,
+        o,
+        &config.params.offset_profile(),
+        config.params.forced_offset_model(),
+    );
     let Ok((profile, model)) = found else {
         let reason = "constant: no offset profile (too short an overlap)".to_string();
         return (
@@ -524,7 +528,7 @@ fn over_time(
         );
     };
     let mut warnings = Vec::new();
-    if config.offset_model.is_none() {
+    if config.params.forced_offset_model().is_none() {
         let code = match model.model {
             OffsetModel::Linear => Some("clock_drift_suspected"),
             OffsetModel::Piecewise => Some("clock_step_suspected"),

@@ -251,7 +251,7 @@ impl Preset {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::eval::config::{EvalConfig, TrajectoryInput};
+    use crate::eval::config::TrajectoryInput;
 
     fn topics(names: &[&str]) -> Vec<TopicInfo> {
         names
@@ -339,11 +339,8 @@ mod tests {
             window: Some(vec![5.0]),
             ..Parameters::default()
         };
-        let mut c = EvalConfig::new(None, NamedInput::file("r.tum"), vec![]);
-        Parameters::layered([&p.parameters, &flags])
-            .apply(&mut c)
-            .unwrap();
-        assert_eq!(c.windows_m, vec![5.0]);
-        assert_eq!(c.platform, crate::eval::config::Platform::Wheeled);
+        let p = Parameters::layered([&p.parameters, &flags]);
+        assert_eq!(p.windows_m(), vec![5.0]);
+        assert_eq!(p.platform(), crate::eval::config::Platform::Wheeled);
     }
 }

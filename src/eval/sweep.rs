@@ -72,13 +72,13 @@ impl SweepParam {
     pub fn apply(self, config: &EvalConfig, v: f64) -> EvalConfig {
         let mut c = config.clone();
         match self {
-            SweepParam::EpsMin => c.eps_min_m = Some(v),
-            SweepParam::CurvatureEps => c.curvature_eps_m = Some(v),
-            SweepParam::PathEps => c.path_eps_m = Some(v),
-            SweepParam::Window => c.windows_m = vec![v],
-            SweepParam::LeverArm => c.lever_arm_m = v,
-            SweepParam::Overlap => c.overlap = v,
-            SweepParam::TimeOffset => c.time_offset_s = Some(v),
+            SweepParam::EpsMin => c.params.eps_min = Some(v),
+            SweepParam::CurvatureEps => c.params.curvature_eps = Some(v),
+            SweepParam::PathEps => c.params.path_eps = Some(v),
+            SweepParam::Window => c.params.window = Some(vec![v]),
+            SweepParam::LeverArm => c.params.lever_arm = Some(v),
+            SweepParam::Overlap => c.params.overlap = Some(v),
+            SweepParam::TimeOffset => c.params.time_offset = Some(v),
         }
         c
     }
@@ -243,7 +243,7 @@ pub fn run_sweep(
     }
     let method_offsets = if param == SweepParam::TimeOffset {
         let mut searched = base.clone();
-        searched.time_offset_s = None;
+        searched.params.time_offset = None;
         evaluate(&searched)?
             .estimates
             .iter()
@@ -334,10 +334,13 @@ mod tests {
     fn apply_sets_the_flag() {
         use crate::eval::config::NamedInput;
         let c = EvalConfig::new(None, NamedInput::topic("/r"), vec![NamedInput::topic("/e")]);
-        assert_eq!(SweepParam::EpsMin.apply(&c, 0.3).eps_min_m, Some(0.3));
-        assert_eq!(SweepParam::Window.apply(&c, 10.0).windows_m, vec![10.0]);
+        assert_eq!(SweepParam::EpsMin.apply(&c, 0.3).params.eps_min, Some(0.3));
         assert_eq!(
-            SweepParam::TimeOffset.apply(&c, -0.2).time_offset_s,
+            SweepParam::Window.apply(&c, 10.0).params.windows_m(),
+            vec![10.0]
+        );
+        assert_eq!(
+            SweepParam::TimeOffset.apply(&c, -0.2).params.time_offset,
             Some(-0.2)
         );
     }

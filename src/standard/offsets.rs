@@ -8,7 +8,6 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::align::auto_offset::auto_time_offset;
-use crate::align::auto_params::auto_params;
 use crate::align::time_offset::{estimate_time_offset, OffsetMethod, OffsetStatus};
 use crate::error::{Error, Result};
 use crate::eval::config::EvalConfig;
@@ -113,12 +112,7 @@ pub fn compare_offset_methods(config: &EvalConfig, spatial_range_s: f64) -> Resu
         .trajectory;
     let t0 = reference.stamps_ns.first().copied().unwrap_or(0);
     let (ref_t, est_t) = (reference.times_s(t0), estimate.times_s(t0));
-    let min_window = config
-        .windows_m
-        .iter()
-        .copied()
-        .fold(f64::INFINITY, f64::min);
-    let auto = auto_params(&ref_t, &reference.positions, min_window, config.dt_max_s);
+    let auto = config.measure(&ref_t, &reference.positions);
     let params = config.resolved(&auto).offset_params();
     let p = ape_pipeline(reference, estimate);
     let row = |method: &str, found: Result<(f64, Option<f64>, String)>, ms: f64| match found {

@@ -23,9 +23,9 @@ fn eval(dir: &Path, reference: &str, estimate: &str, method: OffsetMethod) -> Re
         NamedInput::topic(reference),
         vec![NamedInput::topic(estimate)],
     );
-    c.offset_method = method;
-    c.platform = Platform::Wheeled;
-    c.path_eps_m = Some(PATH_EPS_M);
+    c.params.offset_method = Some(method);
+    c.params.platform = Some(Platform::Wheeled);
+    c.params.path_eps = Some(PATH_EPS_M);
     evaluate(&c, &|_| {}).unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
 }
 
@@ -120,10 +120,10 @@ fn rigid_transform_of_the_estimate_changes_nothing() {
             NamedInput::file(dir.join("reference.tum").to_str().unwrap()),
             vec![NamedInput::file(estimate.to_str().unwrap())],
         );
-        c.offset_method = method;
-        c.platform = Platform::Wheeled;
-        c.path_eps_m = Some(PATH_EPS_M);
-        c.windows_m = vec![5.0, 10.0];
+        c.params.offset_method = Some(method);
+        c.params.platform = Some(Platform::Wheeled);
+        c.params.path_eps = Some(PATH_EPS_M);
+        c.params.window = Some(vec![5.0, 10.0]);
         evaluate(&c, &|_| {}).unwrap()
     };
     // Random yaw and translation (fixed seeds keep the test reproducible).

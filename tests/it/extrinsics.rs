@@ -19,8 +19,8 @@ fn config(rec: std::path::PathBuf, reference: &str, estimate: &str) -> EvalConfi
         vec![NamedInput::topic(estimate)],
     );
     // Measured: ε 2 m, Δt_max 10 s put both missions within 25 ms (ε 1 m: gnss_outages 42 ms off).
-    c.curvature_eps_m = Some(2.0);
-    c.dt_max_s = 10.0;
+    c.params.curvature_eps = Some(2.0);
+    c.params.dt_max = Some(10.0);
     c
 }
 

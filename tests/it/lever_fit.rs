@@ -21,10 +21,10 @@ fn config(dir: &Path, correction: LeverCorrection, offset_s: Option<f64>) -> Eva
         NamedInput::topic("/reference/position"),
         vec![NamedInput::topic("/estimate/odom")],
     );
-    c.offset_method = OffsetMethod::Speed;
-    c.path_eps_m = Some(1.0);
-    c.lever_correction = correction;
-    c.time_offset_s = offset_s;
+    c.params.offset_method = Some(OffsetMethod::Speed);
+    c.params.path_eps = Some(1.0);
+    c.params.lever_correction = Some(correction);
+    c.params.time_offset = offset_s;
     c
 }
 

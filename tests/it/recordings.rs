@@ -82,7 +82,7 @@ fn every_form_of_a_mission_gives_the_same_eval() {
                 NamedInput::topic("/reference/position"),
                 vec![NamedInput::topic("/estimate/odom")],
             );
-            c.platform = Platform::Wheeled;
+            c.params.platform = Some(Platform::Wheeled);
             let r = evaluate(&c, &|_| {}).unwrap_or_else(|e| panic!("{e}"));
             serde_json::to_value((&r.reference, &r.estimates, &r.warnings)).unwrap()
         };

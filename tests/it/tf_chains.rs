@@ -376,7 +376,7 @@ fn lever_config(rec: &Path, lever: LeverSpec) -> EvalConfig {
         vec![NamedInput::topic("/tf:odom:base_link")],
     );
     c.reference_lever = Some(lever);
-    c.time_offset_s = Some(0.2);
+    c.params.time_offset = Some(0.2);
     c
 }
 

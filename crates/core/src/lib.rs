@@ -16,6 +16,7 @@ pub mod diag;
 pub mod error;
 pub mod metrics;
 pub mod output;
+pub mod params;
 pub mod report;
 pub mod simulate;
 pub mod sources;

@@ -30,7 +30,7 @@ pub fn run(a: BatchArgs) -> Result<u8> {
             reference: a.reference.clone(),
             estimates: a.estimate.clone(),
             preset: a.preset.clone(),
-            parameters: a.params.clone(),
+            parameters: a.params.0.clone(),
         };
         Manifest::from_dir(&a.input, &request)?
     } else {
@@ -40,7 +40,7 @@ pub fn run(a: BatchArgs) -> Result<u8> {
             )
             .into());
         }
-        Manifest::from_toml(&a.input, &a.params)?
+        Manifest::from_toml(&a.input, &a.params.0)?
     };
     let shard = match a.shard.as_deref() {
         Some(spec) => Some(Shard::resolve(spec, a.shards, &|v| std::env::var(v).ok())?),

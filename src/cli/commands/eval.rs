@@ -68,7 +68,7 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
         })
         .collect::<trajdrift::Result<_>>()?;
     let preset_parameters = preset.map(|p| p.parameters).unwrap_or_default();
-    Parameters::layered([&preset_parameters, &a.params]).apply(&mut c)?;
+    c.params = Parameters::layered([&preset_parameters, &a.params.0]);
     Ok((c, notes))
 }
 

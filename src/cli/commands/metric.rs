@@ -63,7 +63,7 @@ pub fn inputs(a: &MetricArgs) -> Result<MetricInputs> {
         .into());
     }
     let mut c = EvalConfig::new(recording.first().cloned(), reference, estimates);
-    c.stamp = a.stamp;
+    c.params.stamp = Some(a.stamp);
     c.text = text_options(&a.text)?;
     Ok(MetricInputs::Eval(Box::new(c)))
 }

@@ -106,12 +106,15 @@ pub struct OffsetParams {
     pub max_gap_s: Option<f64>,
 }
 
+/// The coarse grid step of the full-range FFT search, seconds (the fine grid is at most this).
+pub const COARSE_GRID_S: f64 = 0.02;
+
 impl Default for OffsetParams {
     fn default() -> Self {
         OffsetParams {
             max_offset_s: 30.0,
             grid_s: 0.001,
-            coarse_grid_s: 0.02,
+            coarse_grid_s: COARSE_GRID_S,
             curvature: CurvatureParams::default(),
             speed_window_s: 2.0,
             speed_mean_removed: true,
