@@ -30,13 +30,13 @@ pub fn metadata_map(report: &Report) -> BTreeMap<String, String> {
         let o = &e.time_offset;
         m.insert(format!("{n}.topic"), e.topic.clone());
         m.insert(format!("{n}.samples"), e.samples.to_string());
-        m.insert(format!("{n}.time_offset.method"), o.method.clone());
+        m.insert(format!("{n}.time_offset.method"), o.method.to_string());
         m.insert(format!("{n}.time_offset.offset_s"), o.offset_s.to_string());
         m.insert(
             format!("{n}.time_offset.applied_s"),
             o.applied_s.to_string(),
         );
-        m.insert(format!("{n}.time_offset.status"), o.status.clone());
+        m.insert(format!("{n}.time_offset.status"), o.status.to_string());
         m.insert(format!("{n}.time_offset.correlation"), opt(o.correlation));
         m.insert(format!("{n}.time_offset.confidence"), opt(o.confidence));
         for d in &e.drift_error {

@@ -3,6 +3,7 @@
 //! failing mission is recorded with its error and the others go on. Results do not depend on `--jobs`:
 //! every mission is computed alone and the summary is built in name order.
 
+use crate::plot::Trajectories;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -201,9 +202,14 @@ fn run_mission(
                 bytes: b,
             })
         })?;
+        let estimates = inputs.named_estimates();
+        let trajectories = Trajectories {
+            reference: &inputs.reference.trajectory,
+            estimates: &estimates,
+        };
         opts.pictures
             .outputs(&opts.out_dir, &m.name)
-            .write(&report, &inputs)?;
+            .write(&report, trajectories)?;
         if opts.annotate {
             annotate(
                 &m.config,

@@ -45,9 +45,11 @@ pub struct MissionResult {
 impl MissionResult {
     /// True when some estimate's offset was weak.
     pub fn weak(&self) -> bool {
-        self.report
-            .as_ref()
-            .is_some_and(|r| r.estimates.iter().any(|e| e.time_offset.status == "weak"))
+        self.report.as_ref().is_some_and(|r| {
+            r.estimates
+                .iter()
+                .any(|e| e.time_offset.status == crate::report::json::TimeOffsetStatus::Weak)
+        })
     }
 }
 
@@ -58,7 +60,7 @@ pub struct MissionEntry {
     /// Applied offset, s.
     pub dt_s: f64,
     /// `ok`, `weak` or `given`.
-    pub offset_status: String,
+    pub offset_status: crate::report::json::TimeOffsetStatus,
     pub confidence: Option<f64>,
     pub de_rmse: Option<f64>,
     /// evo's APE (SE(3), translation) RMSE on the time-aligned estimate, m (`--metrics ape`).
@@ -119,7 +121,7 @@ impl Summary {
                         .push(MissionEntry {
                             mission: r.mission.clone(),
                             dt_s: e.time_offset.applied_s,
-                            offset_status: e.time_offset.status.clone(),
+                            offset_status: e.time_offset.status,
                             confidence: e.time_offset.confidence,
                             de_rmse: d.rmse,
                             ape_rmse_m: standard_rmse(e, |m| m.ape.as_ref()),

@@ -54,7 +54,7 @@ pub fn render(summary: &Summary, dir: &Path) -> String {
                 escape(&e.estimate),
                 e.window_m,
                 m.dt_s,
-                escape(&m.offset_status),
+                escape(m.offset_status.as_str()),
                 num(m.confidence, 2),
                 num(m.de_rmse, 4),
                 link(&m.mission)

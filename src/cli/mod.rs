@@ -92,6 +92,7 @@ pub fn emit(text: &str) -> trajdrift::Result<()> {
 }
 
 /// Prints a warning line to stderr, names from files escaped.
-pub fn warn(code: &str, message: &str) {
+pub fn warn(w: &trajdrift::diag::Warning) {
+    let (code, message) = (w.code, &w.message);
     eprintln!("warning [{code}]: {}", escape_line(message));
 }

@@ -38,6 +38,17 @@ pub struct Inputs {
     pub bytes: u64,
 }
 
+impl Inputs {
+    /// The estimates by name, with their trajectories (what the figures are drawn from, with the
+    /// reference's [`Loaded::trajectory`]).
+    pub fn named_estimates(&self) -> Vec<(&str, &Trajectory)> {
+        self.estimates
+            .iter()
+            .map(|e| (e.name.as_str(), &e.trajectory))
+            .collect()
+    }
+}
+
 /// The estimate topics whose orientations nothing in this evaluation reads: the default Drift Error,
 /// APE (translation part) and RPE point distance need positions only, and RPE's translation part and
 /// KITTI drift need the reference's orientation too, so a reference without one (PointStamped,

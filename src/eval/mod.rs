@@ -17,15 +17,15 @@ use crate::align::time_offset::{
     estimate_time_offset_cached, OffsetEstimate, OffsetMethod, OffsetStatus, Pair, SignalCache,
 };
 use crate::clock::ClockCorrection;
+use crate::diag::{Warning, WarningCode};
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult};
-use crate::params::Word;
 use crate::report::json::{
-    AutoParameters, DriftErrorReport, EstimateReport, Input, OffsetMethodReport,
-    OffsetProfilePoint, OffsetSegmentReport, Parameters, Report, TimeOffsetReport, Tool,
-    TopicReport, WindowReport, SCHEMA_VERSION,
+    AutoParameters, DriftErrorReport, EstimateReport, Input, MethodStatus, OffsetMethodReport,
+    OffsetProfilePoint, OffsetSegmentReport, OffsetSource, Parameters, Report, TimeOffsetReport,
+    TimeOffsetStatus, Tool, TopicReport, WindowReport, SCHEMA_VERSION,
 };
-use crate::sources::{Progress, Warning};
+use crate::sources::Progress;
 use config::EvalConfig;
 use inputs::{load, Inputs, Loaded};
 
@@ -131,7 +131,7 @@ pub fn evaluate_loaded(config: &EvalConfig, mut inputs: Inputs) -> Result<(Repor
             bytes: inputs.bytes,
         },
         parameters: Parameters {
-            platform: config.params.platform().word().into(),
+            platform: config.params.platform(),
             curvature_eps_m: config.params.curvature_eps_m(),
             path_eps_m: config.params.path_eps_m(),
             theta_max_rad: config.params.theta_max_rad(),
@@ -139,15 +139,12 @@ pub fn evaluate_loaded(config: &EvalConfig, mut inputs: Inputs) -> Result<(Repor
             windows_m: config.params.windows_m().clone(),
             overlap: config.params.overlap(),
             lever_arm_m: config.params.lever_arm_m(),
-            lever_correction: config.params.lever_correction().as_str().into(),
+            lever_correction: config.params.lever_correction(),
             max_offset_s: config.params.max_offset_s(),
             grid_s: config.params.grid_s(),
-            offset_method: config.params.offset_method().as_str().into(),
+            offset_method: config.params.offset_method(),
             time_offset_s: config.params.time_offset,
-            stamp: match config.params.stamp() {
-                crate::sources::StampSource::Header => "header".into(),
-                crate::sources::StampSource::Log => "log".into(),
-            },
+            stamp: config.params.stamp(),
             origin: config.params.origin,
             t_start: to_s(crop_start),
             t_end: to_s(crop_end),
@@ -186,31 +183,24 @@ fn require_samples(path: &str, t: &Loaded) -> Result<()> {
     Ok(())
 }
 
-fn status_str(s: OffsetStatus) -> &'static str {
-    match s {
-        OffsetStatus::Ok => "ok",
-        OffsetStatus::Weak => "weak",
-    }
-}
-
 fn method_report(method: OffsetMethod, r: &Result<OffsetEstimate>) -> OffsetMethodReport {
     match r {
         Ok(o) => OffsetMethodReport {
-            method: method.as_str().into(),
+            method,
             offset_s: Some(o.offset_s),
             correlation: Some(o.correlation),
             confidence: Some(o.confidence),
-            status: status_str(o.status).into(),
+            status: o.status.into(),
             error: None,
             margin: Some(o.margin),
             defined_fraction: Some(o.defined_fraction),
         },
         Err(e) => OffsetMethodReport {
-            method: method.as_str().into(),
+            method,
             offset_s: None,
             correlation: None,
             confidence: None,
-            status: "failed".into(),
+            status: MethodStatus::Failed,
             error: Some(e.to_string()),
             margin: None,
             defined_fraction: None,
@@ -234,10 +224,10 @@ fn evaluate_estimate(
 
     let time_offset = match config.params.time_offset {
         Some(dt) => TimeOffsetReport {
-            method: "given".into(),
+            method: OffsetSource::Given,
             offset_s: dt,
             applied_s: dt,
-            status: "given".into(),
+            status: TimeOffsetStatus::Given,
             reason: Some("given with --time-offset".into()),
             model: Some(OffsetModel::Constant),
             ..Default::default()
@@ -278,7 +268,7 @@ fn evaluate_estimate(
             let (chosen, reason, implied_lever) = match &auto {
                 Some(auto) => {
                     warnings.extend(auto.warnings.iter().map(|w| Warning {
-                        code: w.code.clone(),
+                        code: w.code,
                         message: format!("{}: {}", est.name, w.message),
                     }));
                     (
@@ -298,12 +288,12 @@ fn evaluate_estimate(
                     let (report, w) = over_time(config, &params, &pair, &o, &est.name, t0_ns);
                     warnings.extend(w);
                     TimeOffsetReport {
-                        method: o.method.as_str().into(),
+                        method: o.method.into(),
                         offset_s: report.offset_s,
                         applied_s: report.offset_s,
                         correlation: Some(o.correlation),
                         confidence: Some(o.confidence),
-                        status: "ok".into(),
+                        status: TimeOffsetStatus::Ok,
                         methods,
                         reason: Some(reason),
                         implied_lever_arm_m: implied_lever,
@@ -316,12 +306,12 @@ fn evaluate_estimate(
                 other => {
                     let (method, offset_s, correlation, confidence) = match other {
                         Some(Ok(o)) => (
-                            o.method.as_str(),
+                            o.method,
                             o.offset_s,
                             Some(o.correlation),
                             Some(o.confidence),
                         ),
-                        _ => (config.params.offset_method().as_str(), 0.0, None, None),
+                        _ => (config.params.offset_method(), 0.0, None, None),
                     };
                     let hint = if config.params.offset_method() == OffsetMethod::Auto {
                         format!("{}. Check the overlap or give --time-offset", reason)
@@ -329,10 +319,13 @@ fn evaluate_estimate(
                         "Check the overlap, try --offset-method auto or give --time-offset".into()
                     };
                     warnings.push(Warning {
-                        code: "weak_time_offset".into(),
+                        code: WarningCode::WeakTimeOffset,
                         message: format!(
                             "{}: the {} time-offset peak is weak (best {:+.3} s); Drift Error computed at 0 s. {}",
-                            est.name, method, offset_s, hint
+                            est.name,
+                            method.as_str(),
+                            offset_s,
+                            hint
                         ),
                     });
                     TimeOffsetReport {
@@ -341,7 +334,7 @@ fn evaluate_estimate(
                         applied_s: 0.0,
                         correlation,
                         confidence,
-                        status: "weak".into(),
+                        status: TimeOffsetStatus::Weak,
                         methods,
                         reason: Some(reason),
                         implied_lever_arm_m: implied_lever,
@@ -459,7 +452,7 @@ fn drift_report(r: &DriftErrorResult, t0_s: f64) -> DriftErrorReport {
     let s = r.stats.as_ref();
     DriftErrorReport {
         window_m: r.window_m,
-        lever_correction: r.lever_correction.as_str().into(),
+        lever_correction: r.lever_correction,
         windows: r.windows.len(),
         dropped_windows: r.dropped_windows,
         rmse: s.map(|s| s.rmse),
@@ -530,13 +523,13 @@ fn over_time(
     let mut warnings = Vec::new();
     if config.params.forced_offset_model().is_none() {
         let code = match model.model {
-            OffsetModel::Linear => Some("clock_drift_suspected"),
-            OffsetModel::Piecewise => Some("clock_step_suspected"),
+            OffsetModel::Linear => Some(WarningCode::ClockDriftSuspected),
+            OffsetModel::Piecewise => Some(WarningCode::ClockStepSuspected),
             OffsetModel::Constant => None,
         };
         if let Some(code) = code {
             warnings.push(Warning {
-                code: code.into(),
+                code,
                 message: format!(
                     "{name}: the clock offset is not constant — {}; the estimate's stamps were corrected by this model (force one with --offset-model)",
                     model.reason

@@ -130,7 +130,7 @@ pub struct RowMetrics {
     /// Δt applied by that run (the searched or the given one), seconds.
     pub applied_offset_s: f64,
     /// `ok`, `weak` or `given`.
-    pub offset_status: String,
+    pub offset_status: crate::report::json::TimeOffsetStatus,
     /// evo's APE (SE(3), translation part) RMSE of that run, m (when `--metrics` asks for it).
     pub ape_rmse: Option<f64>,
     /// evo's RPE point distance over 1 m, RMSE, m (positions alone, so defined for every input).
@@ -146,7 +146,7 @@ pub fn row_metrics(e: &EstimateReport, d: &DriftErrorReport) -> RowMetrics {
         de_rmse: d.rmse,
         discarded_fraction: d.discarded_fraction,
         applied_offset_s: e.time_offset.applied_s,
-        offset_status: e.time_offset.status.clone(),
+        offset_status: e.time_offset.status,
         ape_rmse: e
             .standard_metrics
             .as_ref()
@@ -174,7 +174,7 @@ pub struct SweepRow {
 #[derive(Debug, Clone, PartialEq)]
 pub struct MethodOffset {
     pub estimate: String,
-    pub method: String,
+    pub method: crate::align::time_offset::OffsetMethod,
     pub offset_s: f64,
 }
 
@@ -251,7 +251,7 @@ pub fn run_sweep(
                 e.time_offset.methods.iter().filter_map(|m| {
                     m.offset_s.map(|dt| MethodOffset {
                         estimate: e.name.clone(),
-                        method: m.method.clone(),
+                        method: m.method,
                         offset_s: dt,
                     })
                 })
@@ -301,7 +301,7 @@ impl Sweep {
                 opt(m.and_then(|m| m.de_rmse)),
                 opt(m.map(|m| m.discarded_fraction)),
                 opt(m.map(|m| m.applied_offset_s)),
-                m.map_or(String::new(), |m| m.offset_status.clone()),
+                m.map_or(String::new(), |m| m.offset_status.to_string()),
                 opt(m.and_then(|m| m.ape_rmse)),
                 opt(m.and_then(|m| m.rpe_point_distance_1m_rmse)),
                 r.error.clone().unwrap_or_default(),

@@ -4,33 +4,33 @@
 use nalgebra::Vector3;
 
 use super::drift_error::{DeSeries, DriftAlong};
-use super::offset_curves::{correlation_curve, method_from_name, CorrelationCurve};
+use super::offset_curves::{correlation_curve, CorrelationCurve};
 use super::offset_profile::OffsetProfile;
 use super::offset_search::OffsetSearch;
 use super::speed::SpeedFit;
 use super::top_view::TopView;
-use super::{file_stem, Figure, FigureData};
+use super::{file_stem, Figure, FigureData, Trajectories};
 use crate::align::auto_params::reference_noise;
 use crate::align::curvature::CurvatureParams;
 use crate::align::speed::speed_profile;
-use crate::align::time_offset::OffsetParams;
-use crate::eval::inputs::{Inputs, Loaded};
-use crate::report::json::{DriftErrorReport, EstimateReport, Parameters, Report};
+use crate::align::time_offset::{OffsetMethod, OffsetParams};
+use crate::clock::ClockCorrection;
+use crate::report::json::{DriftErrorReport, EstimateReport, Parameters, Report, TimeOffsetStatus};
 use crate::trajectory::Trajectory;
 
 /// Half-width of the lag range drawn around the answer, at least, seconds.
 const MIN_HALF_WIDTH_S: f64 = 5.0;
 
 /// Every figure of every estimate of `report`, in a stable order.
-pub fn mission_figures(report: &Report, inputs: &Inputs) -> Vec<Figure> {
-    let reference = &inputs.reference;
-    let t0_ns = reference.trajectory.stamps_ns.first().copied().unwrap_or(0);
+pub fn mission_figures(report: &Report, inputs: &Trajectories<'_>) -> Vec<Figure> {
+    let reference = inputs.reference;
+    let t0_ns = reference.stamps_ns.first().copied().unwrap_or(0);
     let mut out = Vec::new();
     for e in &report.estimates {
-        let Some(est) = inputs.estimates.iter().find(|l| l.name == e.name) else {
+        let Some(&(_, est)) = inputs.estimates.iter().find(|(name, _)| *name == e.name) else {
             continue;
         };
-        let aligned = aligned(&est.trajectory, e, &report.parameters);
+        let aligned = aligned(est, e, &report.parameters);
         let stem = file_stem(&e.name);
         let fig = |kind: &str, title: String, data: FigureData| Figure {
             name: format!("{stem}_{kind}"),
@@ -64,7 +64,7 @@ pub fn mission_figures(report: &Report, inputs: &Inputs) -> Vec<Figure> {
             let data = offset_search(t.clone(), reference, est, e, &report.parameters, t0_ns);
             out.push(fig("offset_search", t, FigureData::OffsetSearch(data)));
         }
-        let ref_t = reference.trajectory.times_s(t0_ns);
+        let ref_t = reference.times_s(t0_ns);
         let t = format!("Time offset of {} over the mission", e.name);
         let profile = OffsetProfile::from_report(
             t.clone(),
@@ -80,9 +80,10 @@ pub fn mission_figures(report: &Report, inputs: &Inputs) -> Vec<Figure> {
     out
 }
 
-/// The estimate on the reference clock, cropped like the evaluation.
+/// The estimate on the reference clock as the evaluation moved it (its clock model, to the
+/// nanosecond), cropped like the evaluation.
 fn aligned(est: &Trajectory, e: &EstimateReport, p: &Parameters) -> Trajectory {
-    let mut a = est.shifted((e.time_offset.applied_s * 1e9).round() as i64);
+    let mut a = ClockCorrection::from_report(&e.time_offset).apply(est);
     let ns = |s: Option<f64>| s.map(|s| (s * 1e9).round() as i64);
     a.crop(ns(p.t_start), ns(p.t_end));
     a
@@ -94,7 +95,7 @@ fn abs_s(ns: i64) -> f64 {
 
 fn top_view(
     title: String,
-    reference: &Loaded,
+    reference: &Trajectory,
     aligned: &Trajectory,
     d: &DriftErrorReport,
 ) -> TopView {
@@ -116,12 +117,7 @@ fn top_view(
     let mut v = TopView {
         title,
         window_m: d.window_m,
-        reference: reference
-            .trajectory
-            .positions
-            .iter()
-            .map(|p| (p.x, p.y))
-            .collect(),
+        reference: reference.positions.iter().map(|p| (p.x, p.y)).collect(),
         ..Default::default()
     };
     let fit = display_fit(reference, aligned);
@@ -139,8 +135,11 @@ fn top_view(
 /// The rotation about z and translation that best lay the estimate (its own frame) onto the
 /// reference at the same times (2-D Kabsch, least squares) — for display only: Drift Error needs no
 /// spatial alignment, but a reader compares shapes best when they overlap.
-fn display_fit(reference: &Loaded, aligned: &Trajectory) -> impl Fn(&Vector3<f64>) -> (f64, f64) {
-    let r = &reference.trajectory;
+fn display_fit(
+    reference: &Trajectory,
+    aligned: &Trajectory,
+) -> impl Fn(&Vector3<f64>) -> (f64, f64) {
+    let r = reference;
     let pairs: Vec<((f64, f64), (f64, f64))> = super::style::decimate(aligned.len(), 5000)
         .into_iter()
         .filter_map(|i| {
@@ -206,17 +205,12 @@ fn cumulative_distance(positions: &[Vector3<f64>], eps: f64) -> Vec<f64> {
 
 fn drift_along(
     title: String,
-    reference: &Loaded,
+    reference: &Trajectory,
     des: &[DriftErrorReport],
     eps: f64,
 ) -> DriftAlong {
-    let times: Vec<f64> = reference
-        .trajectory
-        .stamps_ns
-        .iter()
-        .map(|&n| abs_s(n))
-        .collect();
-    let dist = cumulative_distance(&reference.trajectory.positions, eps.max(1e-6));
+    let times: Vec<f64> = reference.stamps_ns.iter().map(|&n| abs_s(n)).collect();
+    let dist = cumulative_distance(&reference.positions, eps.max(1e-6));
     let at = |t: f64| {
         dist[times
             .partition_point(|&x| x < t)
@@ -256,15 +250,15 @@ pub fn offset_params(p: &Parameters) -> OffsetParams {
 
 fn offset_search(
     title: String,
-    reference: &Loaded,
-    est: &Loaded,
+    reference: &Trajectory,
+    est: &Trajectory,
     e: &EstimateReport,
     p: &Parameters,
     t0_ns: i64,
 ) -> OffsetSearch {
     let params = offset_params(p);
-    let ref_t = reference.trajectory.times_s(t0_ns);
-    let est_t = est.trajectory.times_s(t0_ns);
+    let ref_t = reference.times_s(t0_ns);
+    let est_t = est.times_s(t0_ns);
     let peaks: Vec<f64> = e
         .time_offset
         .methods
@@ -278,15 +272,15 @@ fn offset_search(
         .time_offset
         .methods
         .iter()
-        .filter_map(|m| Some((m, method_from_name(&m.method)?)))
-        .map(|(m, method)| CorrelationCurve {
-            method: m.method.clone(),
+        .filter(|m| m.method != OffsetMethod::Auto)
+        .map(|m| CorrelationCurve {
+            method: m.method,
             points: correlation_curve(
-                method,
+                m.method,
                 &ref_t,
-                &reference.trajectory.positions,
+                &reference.positions,
                 &est_t,
-                &est.trajectory.positions,
+                &est.positions,
                 &params,
                 center,
                 half,
@@ -297,13 +291,13 @@ fn offset_search(
     OffsetSearch {
         title,
         curves,
-        chosen_s: (e.time_offset.status == "ok").then_some(e.time_offset.applied_s),
+        chosen_s: (e.time_offset.status == TimeOffsetStatus::Ok).then_some(e.time_offset.applied_s),
     }
 }
 
 fn speed_fit(
     title: String,
-    reference: &Loaded,
+    reference: &Trajectory,
     aligned: &Trajectory,
     p: &Parameters,
     t0_ns: i64,
@@ -316,17 +310,14 @@ fn speed_fit(
             .map(|s| (s.t, s.speed))
             .collect()
     };
-    let reference_t = reference.trajectory.times_s(t0_ns);
+    let reference_t = reference.times_s(t0_ns);
     // Thinning to MAX_POINTS spaces the points by span/MAX_POINTS; a gap must be longer than that.
     let span =
         reference_t.last().copied().unwrap_or(0.0) - reference_t.first().copied().unwrap_or(0.0);
     SpeedFit {
         title,
         max_gap_s: p.dt_max_s.max(3.0 * span / super::style::MAX_POINTS as f64),
-        reference: profile(
-            &reference.trajectory.times_s(t0_ns),
-            &reference.trajectory.positions,
-        ),
+        reference: profile(&reference.times_s(t0_ns), &reference.positions),
         estimate: profile(&aligned.times_s(t0_ns), &aligned.positions),
     }
 }

@@ -20,6 +20,7 @@ use plotters::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::output::write_output;
+use crate::trajectory::Trajectory;
 pub use mission::mission_figures;
 pub use style::PlotFormat;
 
@@ -99,6 +100,15 @@ pub fn file_stem(name: &str) -> String {
         .to_string()
 }
 
+/// The trajectories a mission's figures are drawn from: the reference as the evaluation cropped it,
+/// and each estimate, by name, on its own clock (the figures move it as the report's clock correction
+/// did).
+#[derive(Debug, Clone, Copy)]
+pub struct Trajectories<'a> {
+    pub reference: &'a Trajectory,
+    pub estimates: &'a [(&'a str, &'a Trajectory)],
+}
+
 /// Where a mission's pictures go: `--plot DIR` (in `format`) and/or `--html FILE`.
 #[derive(Debug, Clone, Default)]
 pub struct PictureOutputs {
@@ -117,12 +127,12 @@ impl PictureOutputs {
     pub fn write(
         &self,
         report: &crate::report::json::Report,
-        inputs: &crate::eval::inputs::Inputs,
+        inputs: Trajectories<'_>,
     ) -> Result<Vec<PathBuf>> {
         if !self.any() {
             return Ok(Vec::new());
         }
-        let figures = mission_figures(report, inputs);
+        let figures = mission_figures(report, &inputs);
         let mut written = Vec::new();
         if let Some(dir) = &self.plot_dir {
             written.extend(write_figures(

@@ -10,9 +10,9 @@ use crate::align::time_offset::{OffsetMethod, OffsetParams, Pair, SignalCache};
 use crate::align::xcorr::masked_ncc_blocks;
 
 /// One method's NCC against the offset Δt (seconds).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct CorrelationCurve {
-    pub method: String,
+    pub method: OffsetMethod,
     pub points: Vec<(f64, f64)>,
     /// The method's refined answer (Δt, peak NCC), from the report.
     pub peak: Option<(f64, f64)>,
@@ -49,17 +49,6 @@ pub fn correlation_curve(
         .filter(|&i| ncc.overlap[i] >= 3)
         .map(|i| ((ncc.lag(i) - shift) as f64 * h, ncc.ncc[i]))
         .collect()
-}
-
-/// Which method a report's name is.
-pub fn method_from_name(name: &str) -> Option<OffsetMethod> {
-    [
-        OffsetMethod::Curvature,
-        OffsetMethod::Speed,
-        OffsetMethod::SignedCurvature,
-    ]
-    .into_iter()
-    .find(|m| m.as_str() == name)
 }
 
 #[cfg(test)]

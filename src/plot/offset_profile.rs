@@ -10,6 +10,7 @@ use plotters::prelude::*;
 
 use super::style::{legend, padded_range, plot_err, series_color, xy_chart, Chart, Draw};
 use crate::align::clock_model::OffsetModel;
+use crate::clock::ClockCorrection;
 use crate::error::Result;
 use crate::report::json::TimeOffsetReport;
 
@@ -46,8 +47,8 @@ pub struct OffsetProfile {
 impl OffsetProfile {
     /// From the report's `time_offset`: its profile windows, and the chosen model drawn over
     /// `[t_first, t_last]`. Times are shown in seconds from `t0` (the reference's first stamp, the
-    /// report's times are absolute). A linear model is drawn through the headline Δt at the middle of
-    /// the profile's span with the reported drift as its slope.
+    /// report's times are absolute). A linear model is drawn as the clock correction applies it
+    /// ([`ClockCorrection`], the report's `t_mid` and drift).
     pub fn from_report(
         title: String,
         o: &TimeOffsetReport,
@@ -79,16 +80,14 @@ impl OffsetProfile {
                 .map(|s| flat(s.t_start - t0, s.t_end - t0, s.offset_s, Some(s.sigma_s)))
                 .collect(),
             OffsetModel::Linear => {
-                let mid = match (points.first(), points.last()) {
-                    (Some(a), Some(b)) => 0.5 * (a.t + b.t),
-                    _ => 0.5 * (t_first + t_last),
-                };
-                let slope = -o.drift_ppm.unwrap_or(0.0) * 1e-6;
+                // The model as the estimate's stamps were corrected by it (the report's t_mid).
+                let c = ClockCorrection::from_report(o);
+                let at = |t: f64| c.offset_at_s(t + t0).unwrap_or(o.applied_s);
                 vec![Segment {
                     t_start: t_first,
                     t_end: t_last,
-                    offset_s: o.applied_s + slope * (t_first - mid),
-                    offset_end_s: o.applied_s + slope * (t_last - mid),
+                    offset_s: at(t_first),
+                    offset_end_s: at(t_last),
                     sigma_s: o.sigma_s,
                 }]
             }

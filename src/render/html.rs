@@ -78,9 +78,10 @@ fn table(head: &[&str], rows: &[Vec<String>]) -> String {
 }
 
 fn parameter_card(r: &Report) -> String {
+    use crate::params::Word;
     let p = &r.parameters;
     let rows = vec![
-        vec!["platform".into(), p.platform.clone()],
+        vec!["platform".into(), p.platform.word().to_string()],
         vec!["ε curvature (m)".into(), num(Some(p.curvature_eps_m), 3)],
         vec!["ε path (m)".into(), num(Some(p.path_eps_m), 3)],
         vec!["θ_max (rad)".into(), num(Some(p.theta_max_rad), 3)],
@@ -95,11 +96,14 @@ fn parameter_card(r: &Report) -> String {
                 .join(", "),
         ],
         vec!["overlap".into(), num(Some(p.overlap), 2)],
-        vec!["lever correction".into(), p.lever_correction.clone()],
+        vec![
+            "lever correction".into(),
+            p.lever_correction.word().to_string(),
+        ],
         vec!["lever arm a (m)".into(), num(Some(p.lever_arm_m), 3)],
-        vec!["offset method".into(), p.offset_method.clone()],
+        vec!["offset method".into(), p.offset_method.to_string()],
         vec!["max offset (s)".into(), num(Some(p.max_offset_s), 1)],
-        vec!["stamp".into(), p.stamp.clone()],
+        vec!["stamp".into(), p.stamp.word().to_string()],
         vec!["reference noise σ (m)".into(), num(p.reference_noise_m, 4)],
     ];
     let mut s = String::from("<h2>Parameters</h2>\n");
@@ -120,8 +124,8 @@ fn offset_section(e: &EstimateReport) -> String {
         s,
         "<p>Applied Δt = <b>{:+.4} s</b> ({}, status {}). {}</p>",
         o.applied_s,
-        escape(&o.method),
-        escape(&o.status),
+        escape(o.method.as_str()),
+        escape(o.status.as_str()),
         escape(o.reason.as_deref().unwrap_or(""))
     );
     let rows: Vec<Vec<String>> = o
@@ -129,13 +133,13 @@ fn offset_section(e: &EstimateReport) -> String {
         .iter()
         .map(|m| {
             vec![
-                m.method.clone(),
+                m.method.to_string(),
                 m.offset_s.map_or("–".into(), |x| format!("{x:+.4}")),
                 num(m.correlation, 3),
                 num(m.confidence, 2),
                 num(m.margin, 3),
                 num(m.defined_fraction, 2),
-                m.status.clone(),
+                m.status.to_string(),
                 m.error.clone().unwrap_or_default(),
             ]
         })
@@ -187,7 +191,7 @@ fn drift_section(r: &Report) -> String {
                     num(d.q3, 4),
                     num(d.p95, 4),
                     num(Some(d.discarded_fraction), 3),
-                    d.lever_correction.clone(),
+                    d.lever_correction.as_str().to_string(),
                     num(d.scale, 4),
                     num(d.lateral_lever_m, 3),
                 ]

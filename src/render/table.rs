@@ -62,7 +62,7 @@ pub fn render(report: &Report) -> String {
                     .map_or("      -".into(), |v| format!("{v:+.4} s")),
                 m.correlation.map_or("-".into(), |c| format!("{c:.3}")),
                 m.confidence.map_or("-".into(), |c| format!("{c:.2}")),
-                m.error.as_deref().unwrap_or(&m.status)
+                m.error.as_deref().unwrap_or(m.status.as_str())
             );
         }
         if let (Some(m), Some(why)) = (o.model, o.model_reason.as_deref()) {

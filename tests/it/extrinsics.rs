@@ -3,6 +3,7 @@
 //! refused.
 
 use crate::common;
+use trajdrift::align::time_offset::OffsetMethod;
 
 use trajdrift::eval::config::{EvalConfig, NamedInput};
 use trajdrift::eval::evaluate;
@@ -54,7 +55,7 @@ fn true_levers_put_both_curvature_methods_within_25_ms() {
         c.reference_lever = Some(lever(&truth, "reference").into());
         let report = evaluate(&c, &|_| {}).unwrap();
         let est = &report.estimates[0];
-        let offset = |method: &str| {
+        let offset = |method: OffsetMethod| {
             est.time_offset
                 .methods
                 .iter()
@@ -62,7 +63,10 @@ fn true_levers_put_both_curvature_methods_within_25_ms() {
                 .and_then(|x| x.offset_s)
                 .unwrap()
         };
-        let (curvature, signed) = (offset("curvature"), offset("signed-curvature"));
+        let (curvature, signed) = (
+            offset(OffsetMethod::Curvature),
+            offset(OffsetMethod::SignedCurvature),
+        );
         eprintln!("{m}: curvature {curvature:+.4} s, signed {signed:+.4} s, true {dt_true:+.4} s");
         assert!(
             (curvature - dt_true).abs() < 0.025,

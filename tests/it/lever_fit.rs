@@ -51,7 +51,7 @@ fn fit_recovers_the_scale_error_and_the_lateral_lever() {
         let (median, rmse) = (d.median.expect("median"), d.rmse.expect("rmse"));
         let (s, lever) = (d.scale.expect("scale"), d.lateral_lever_m.expect("d"));
         println!("{m}: median {median:.4} rmse {rmse:.4} s {s:.4} d {lever:.3} (true {lateral})");
-        assert_eq!(d.lever_correction, "fit");
+        assert_eq!(d.lever_correction, LeverCorrection::Fit);
         assert!(
             (median - scale).abs() <= 0.005,
             "{m}: median DE {median:.4} vs scale error {scale}"

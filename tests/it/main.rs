@@ -8,6 +8,7 @@ mod acceptance;
 mod annotate;
 mod batch;
 mod cli;
+mod clock_consumers;
 mod conformance;
 mod drift_error;
 mod evo_reference;

@@ -2,6 +2,7 @@
 //! `rosbags`, not by us) and against small files written here with `mcap::Writer` in every layout.
 
 use crate::common;
+use trajdrift::diag::WarningCode;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -293,7 +294,7 @@ fn truncated_recording_warns_and_keeps_what_was_read() {
         }
         let ex = result.unwrap();
         assert_eq!(ex.warnings.len(), 1);
-        assert_eq!(ex.warnings[0].code, "truncated_recording");
+        assert_eq!(ex.warnings[0].code, WarningCode::TruncatedRecording);
         assert!(ex.warnings[0].message.contains(&cut.to_string()));
         assert!(ex.warnings[0].message.contains(&path.display().to_string()));
         let got = &ex.topics[0].trajectory;

@@ -3,6 +3,8 @@
 //! mode of the curvature methods (noise vs ε, the Δx/v lead, unsigned κ's false confidence).
 
 use crate::common;
+use trajdrift::diag::WarningCode;
+use trajdrift::report::json::TimeOffsetStatus;
 
 use trajdrift::align::auto_offset::{auto_time_offset, Verdict};
 use trajdrift::align::auto_params::auto_params;
@@ -83,24 +85,24 @@ fn auto_defaults_are_right_or_weak_on_every_mission() {
             .as_f64()
             .unwrap();
         let err = o.offset_s - dt_true;
-        assert_eq!(rep.parameters.offset_method, "auto");
+        assert_eq!(rep.parameters.offset_method, OffsetMethod::Auto);
         assert_eq!(o.methods.len(), 3, "{m}: every method is reported");
         if m == "straight" {
             assert!(
-                err.abs() < 0.020 || o.status == "weak",
+                err.abs() < 0.020 || o.status == TimeOffsetStatus::Weak,
                 "{m}: Δt {} vs {dt_true} with status {}",
                 o.offset_s,
                 o.status
             );
         } else {
-            assert_eq!(o.status, "ok", "{m}: {o:?}");
+            assert_eq!(o.status, TimeOffsetStatus::Ok, "{m}: {o:?}");
             assert!(
                 err.abs() < 0.020,
                 "{m}: Δt {} vs {dt_true} ({o:?})",
                 o.offset_s
             );
         }
-        if o.status == "ok" {
+        if o.status == TimeOffsetStatus::Ok {
             // The fixtures' clocks neither drift nor step: the profile keeps one constant offset.
             assert_eq!(
                 o.model,
@@ -111,7 +113,8 @@ fn auto_defaults_are_right_or_weak_on_every_mission() {
             assert!(
                 !rep.warnings
                     .iter()
-                    .any(|w| w.code == "clock_drift_suspected" || w.code == "clock_step_suspected"),
+                    .any(|w| w.code == WarningCode::ClockDriftSuspected
+                        || w.code == WarningCode::ClockStepSuspected),
                 "{m}"
             );
         }
@@ -174,7 +177,10 @@ fn turns_in_place_do_not_fake_a_lever_arm() {
         ("legged", true),
     ] {
         let rep = eval_defaults(&mission(&shared, m));
-        let warned = rep.warnings.iter().any(|w| w.code == "lever_arm_suspected");
+        let warned = rep
+            .warnings
+            .iter()
+            .any(|w| w.code == WarningCode::LeverArmSuspected);
         assert_eq!(warned, lever_ahead, "{m}: {:?}", rep.warnings);
     }
 }
@@ -229,7 +235,10 @@ fn a_forward_lever_arm_is_caught() {
     assert_eq!(a.decision.verdict, Verdict::LeverArm, "{:?}", a.decision);
     let lever = a.decision.implied_lever_arm_m.unwrap();
     assert!((lever.abs() - 0.4).abs() < 0.15, "implied lever {lever}");
-    assert!(a.warnings.iter().any(|w| w.code == "lever_arm_suspected"));
+    assert!(a
+        .warnings
+        .iter()
+        .any(|w| w.code == WarningCode::LeverArmSuspected));
 }
 
 /// Unsigned κ correlates positively even on noise: on a straight line at constant speed its raw NCC

@@ -2,6 +2,7 @@
 //! model chosen from it (constant / linear / piecewise), on simulated missions with a known clock.
 
 use crate::common;
+use trajdrift::diag::WarningCode;
 
 use nalgebra::Vector3;
 use trajdrift::align::auto_offset::auto_time_offset;
@@ -444,7 +445,7 @@ fn shared_missions_get_their_clock_model() {
     assert!(rep
         .warnings
         .iter()
-        .any(|w| w.code == "clock_step_suspected"));
+        .any(|w| w.code == WarningCode::ClockStepSuspected));
     let t0 = o.profile[0].t - 0.5 * o.profile_window_s.unwrap();
     let at = truth["time_offset"]["clock_step_t_s"].as_f64().unwrap();
     assert_eq!(o.segments.len(), 2, "{:?}", o.segments);
@@ -478,13 +479,13 @@ fn shared_missions_get_their_clock_model() {
     assert!(rep
         .warnings
         .iter()
-        .any(|w| w.code == "clock_drift_suspected"));
+        .any(|w| w.code == WarningCode::ClockDriftSuspected));
 }
 
 fn has_clock_warning(rep: &Report) -> bool {
-    rep.warnings
-        .iter()
-        .any(|w| w.code == "clock_drift_suspected" || w.code == "clock_step_suspected")
+    rep.warnings.iter().any(|w| {
+        w.code == WarningCode::ClockDriftSuspected || w.code == WarningCode::ClockStepSuspected
+    })
 }
 
 /// Acceptance: the real recordings of `shared/evo-data` (EuRoC V102, TUM fr1_xyz and fr2_desk, KITTI

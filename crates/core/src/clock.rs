@@ -7,7 +7,8 @@
 //! that one of them could choose differently: a reader of the JSON report can redo it exactly.
 
 use crate::align::clock_model::OffsetModel;
-use crate::report::json::TimeOffsetReport;
+use crate::metrics::standard::poses::Poses;
+use crate::report::json::{TimeOffsetReport, TimeOffsetStatus};
 use crate::trajectory::Trajectory;
 
 /// How an estimate's stamps move onto the reference clock.
@@ -38,7 +39,7 @@ impl ClockCorrection {
         let constant = ClockCorrection::Constant {
             dt_ns: ns(o.applied_s),
         };
-        if o.status != "ok" {
+        if o.status != TimeOffsetStatus::Ok {
             return constant;
         }
         match (o.model, o.drift_ppm, o.t_mid) {
@@ -90,6 +91,63 @@ impl ClockCorrection {
         }
     }
 
+    /// The offset Δt (seconds) the correction gives at `t_s`, seconds on the reference clock: what a
+    /// figure draws as the model; `None` where a piecewise model has no segment.
+    pub fn offset_at_s(&self, t_s: f64) -> Option<f64> {
+        let t = ns(t_s);
+        match self {
+            ClockCorrection::Constant { dt_ns } => Some(*dt_ns as f64 * 1e-9),
+            ClockCorrection::Linear {
+                offset_s,
+                drift_ppm,
+                t_mid_ns,
+            } => Some(offset_s - drift_ppm * 1e-6 * (t - t_mid_ns) as f64 * 1e-9),
+            ClockCorrection::Piecewise { segments } => {
+                let n = segments.len();
+                segments
+                    .iter()
+                    .enumerate()
+                    .find(|&(i, &(start, end, _))| {
+                        (i == 0 || t >= start) && (i + 1 == n || t < end)
+                    })
+                    .map(|(_, &(_, _, offset_s))| offset_s)
+            }
+        }
+    }
+
+    /// Whether every stamp moves by the same offset.
+    pub fn is_constant(&self) -> bool {
+        matches!(self, ClockCorrection::Constant { .. })
+    }
+
+    /// Poses for evo's metrics (stamps in seconds on the estimate's clock) on the reference clock,
+    /// each stamp mapped like [`Self::stamp`] maps its nanoseconds; poses mapped nowhere, or not after
+    /// the previous one, are dropped (as [`Self::apply`] drops them). A path paired by index (no
+    /// stamps) is returned as it is.
+    pub fn apply_to_poses(&self, poses: Poses) -> Poses {
+        let Some(stamps) = &poses.stamps_s else {
+            return poses;
+        };
+        let mut keep: Vec<u32> = Vec::with_capacity(stamps.len());
+        let mut mapped: Vec<f64> = Vec::with_capacity(stamps.len());
+        let mut last = i64::MIN;
+        for (i, &t) in stamps.iter().enumerate() {
+            let Some(stamp) = self.stamp(ns(t)) else {
+                continue;
+            };
+            if stamp <= last {
+                continue;
+            }
+            last = stamp;
+            keep.push(i as u32);
+            // The same shift as the nanoseconds, added to the stamp as read (no rounding of it).
+            mapped.push(t + (stamp - ns(t)) as f64 * 1e-9);
+        }
+        let mut out = poses.select(&keep);
+        out.stamps_s = Some(mapped);
+        out
+    }
+
     /// `trajectory` (stamps on the estimate's clock) on the reference clock; samples mapped nowhere,
     /// or not after the previous one (a backward clock step repeats a stretch of stamps), are dropped.
     pub fn apply(&self, trajectory: &Trajectory) -> Trajectory {
@@ -122,7 +180,7 @@ mod tests {
 
     fn report(model: OffsetModel) -> TimeOffsetReport {
         TimeOffsetReport {
-            status: "ok".into(),
+            status: TimeOffsetStatus::Ok,
             offset_s: 0.5,
             applied_s: 0.5,
             model: Some(model),
@@ -180,7 +238,7 @@ mod tests {
     #[test]
     fn weak_or_constant_is_the_applied_offset() {
         let weak = TimeOffsetReport {
-            status: "weak".into(),
+            status: TimeOffsetStatus::Weak,
             applied_s: 0.0,
             drift_ppm: Some(100.0),
             t_mid: Some(1000.0),

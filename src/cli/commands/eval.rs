@@ -7,7 +7,7 @@ use trajdrift::eval::config::{EvalConfig, LeverSpec, NamedInput};
 use trajdrift::eval::evaluate_with_inputs;
 use trajdrift::eval::parameters::Parameters;
 use trajdrift::eval::preset::Preset;
-use trajdrift::plot::{PictureOutputs, PlotFormat};
+use trajdrift::plot::{PictureOutputs, PlotFormat, Trajectories};
 use trajdrift::render::table;
 
 use crate::cli::args::{text_options, EvalArgs, PlotFormatArg};
@@ -144,7 +144,12 @@ pub fn run(a: EvalArgs) -> Result<u8> {
         }
     }
     let pictures = pictures_from_args(&a, config.recording.as_deref())?;
-    for path in pictures.write(&report, &inputs)? {
+    let estimates = inputs.named_estimates();
+    let trajectories = Trajectories {
+        reference: &inputs.reference.trajectory,
+        estimates: &estimates,
+    };
+    for path in pictures.write(&report, trajectories)? {
         if !a.quiet {
             eprintln!("wrote {}", path.display());
         }
@@ -163,7 +168,7 @@ pub fn run(a: EvalArgs) -> Result<u8> {
     // (quiet, JSON on stdout, stdout redirected) they go to stderr, where the user sees them.
     if !(table && std::io::IsTerminal::is_terminal(&std::io::stdout())) {
         for w in &report.warnings {
-            crate::cli::warn(&w.code, &w.message);
+            crate::cli::warn(w);
         }
     }
     Ok(if report.warnings.is_empty() {

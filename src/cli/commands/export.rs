@@ -62,7 +62,7 @@ pub fn run(mut a: ExportArgs) -> Result<u8> {
     }
     guard.write("OUT", &a.out, &bytes)?;
     for w in &extraction.warnings {
-        crate::cli::warn(&w.code, &w.message);
+        crate::cli::warn(w);
     }
     Ok(EXIT_OK)
 }

@@ -3,12 +3,14 @@
 
 use anyhow::Result;
 
+use trajdrift::clock::ClockCorrection;
 use trajdrift::eval::config::{EvalConfig, NamedInput};
 use trajdrift::eval::preset::Preset;
 use trajdrift::metrics::standard::{
     Alignment, Metric, MetricResult, Pipeline, Plane, PoseRelation, SyncMethod,
 };
 use trajdrift::output::write_output;
+use trajdrift::report::json::TimeOffsetStatus;
 use trajdrift::standard::inputs::{EvoFormat, LoadedPair, MetricInputs};
 
 use crate::cli::args::{text_options, MetricArgs};
@@ -97,25 +99,58 @@ pub fn pipeline(a: &MetricArgs, t_offset_s: f64) -> Pipeline {
     }
 }
 
-/// Resolves `--t_offset` / `--time-offset S|auto`; returns the offset and whether the user must see a
-/// warning (a weak automatic offset).
-pub fn time_offset(a: &MetricArgs, inputs: &MetricInputs) -> Result<(f64, bool)> {
+/// The estimate's time offset for the metric: a constant added to its stamps in seconds (evo's
+/// `--t_offset`), or the clock model `--time-offset auto` found when it is not constant (the same
+/// correction `eval` applies); and whether the user must see a warning (a weak automatic offset).
+pub struct ResolvedOffset {
+    pub constant_s: f64,
+    pub model: Option<ClockCorrection>,
+    pub weak: bool,
+}
+
+/// Resolves `--t_offset` / `--time-offset S|auto`.
+pub fn time_offset(a: &MetricArgs, inputs: &MetricInputs) -> Result<ResolvedOffset> {
+    let constant = |t: f64| ResolvedOffset {
+        constant_s: t,
+        model: None,
+        weak: false,
+    };
     if let Some(t) = a.t_offset {
-        return Ok((t, false));
+        return Ok(constant(t));
     }
     match a.time_offset.as_deref() {
-        None => Ok((0.0, false)),
+        None => Ok(constant(0.0)),
         Some("auto") => {
             let config = inputs.offset_config()?;
             let report = trajdrift::eval::evaluate(&config, &|_| {})?;
             let o = &report.estimates[0].time_offset;
+            let correction = ClockCorrection::from_report(o);
+            let model = o.model.filter(|_| !correction.is_constant());
             eprintln!(
-                "time offset (auto): {:+.4} s found by {} ({}), {:+.4} s applied",
-                o.offset_s, o.method, o.status, o.applied_s
+                "time offset (auto): {:+.4} s found by {} ({}), {}",
+                o.offset_s,
+                o.method,
+                o.status,
+                match model {
+                    Some(m) => format!("clock model {} applied", m.as_str()),
+                    None => format!("{:+.4} s applied", o.applied_s),
+                }
             );
-            Ok((o.applied_s, o.status != "ok" && o.status != "given"))
+            let weak = !matches!(o.status, TimeOffsetStatus::Ok | TimeOffsetStatus::Given);
+            Ok(match model {
+                Some(_) => ResolvedOffset {
+                    constant_s: 0.0,
+                    model: Some(correction),
+                    weak,
+                },
+                None => ResolvedOffset {
+                    constant_s: o.applied_s,
+                    model: None,
+                    weak,
+                },
+            })
         }
-        Some(s) => s.parse::<f64>().map(|t| (t, false)).map_err(|_| {
+        Some(s) => s.parse::<f64>().map(constant).map_err(|_| {
             trajdrift::Error::InvalidArgument(format!(
                 "--time-offset {s}: expected seconds or `auto`"
             ))
@@ -128,10 +163,11 @@ pub fn time_offset(a: &MetricArgs, inputs: &MetricInputs) -> Result<(f64, bool)>
 pub fn run(a: &MetricArgs, metric: Metric) -> Result<u8> {
     let relation = PoseRelation::parse(&a.pose_relation)?;
     let inputs = inputs(a)?;
-    let (offset, weak) = time_offset(a, &inputs)?;
+    let resolved = time_offset(a, &inputs)?;
+    let (offset, weak) = (resolved.constant_s, resolved.weak);
     let LoadedPair {
         reference,
-        estimate,
+        mut estimate,
         ..
     } = {
         let alignment = pipeline(a, offset).alignment;
@@ -139,6 +175,9 @@ pub fn run(a: &MetricArgs, metric: Metric) -> Result<u8> {
             trajdrift::metrics::standard::needs_orientation(metric, relation, alignment);
         inputs.load_with(&|_| {}, orientation)?
     };
+    if let Some(model) = &resolved.model {
+        estimate = model.apply_to_poses(estimate);
+    }
     let pipeline = pipeline(a, offset);
     let result =
         trajdrift::metrics::standard::evaluate(reference, estimate, metric, relation, &pipeline)?;

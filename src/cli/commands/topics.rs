@@ -23,7 +23,7 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
     let (pairs, mut warnings) = source.frame_pairs_checked(&|_| {})?;
     if topics.is_empty() && warnings.is_empty() {
         warnings.push(Warning {
-            code: "empty_recording".into(),
+            code: trajdrift::diag::WarningCode::EmptyRecording,
             message: format!(
                 "{}: empty recording: it holds no channel and no message",
                 a.recording[0].display()
@@ -47,7 +47,7 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
         crate::cli::emit(&render(&topics, &pairs, &presets, &files))?;
     }
     for w in &warnings {
-        crate::cli::warn(&w.code, &w.message);
+        crate::cli::warn(w);
     }
     Ok(if warnings.is_empty() {
         EXIT_OK

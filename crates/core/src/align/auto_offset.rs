@@ -254,14 +254,14 @@ pub fn auto_time_offset_of(pair: &Pair<'_>, params: &OffsetParams) -> Result<Aut
     let mut warnings = Vec::new();
     match decision.verdict {
         Verdict::LeverArm => warnings.push(Warning {
-            code: "lever_arm_suspected".into(),
+            code: crate::diag::WarningCode::LeverArmSuspected,
             message: format!(
                 "time offset: {}. Measure the lever arm between the sensors",
                 decision.reason
             ),
         }),
         Verdict::CurvatureOnly => warnings.push(Warning {
-            code: "lever_arm_unchecked".into(),
+            code: crate::diag::WarningCode::LeverArmUnchecked,
             message: format!(
                 "time offset: {}. Give --time-offset if the sensors are mounted apart along the direction of travel",
                 decision.reason

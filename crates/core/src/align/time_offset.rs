@@ -84,6 +84,12 @@ impl OffsetMethod {
     }
 }
 
+impl std::fmt::Display for OffsetMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 /// Parameters of the offset search.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct OffsetParams {

@@ -36,6 +36,12 @@ pub enum LeverCorrection {
     Fit,
 }
 
+impl std::fmt::Display for LeverCorrection {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 impl LeverCorrection {
     /// The name used on the command line and in reports.
     pub fn as_str(&self) -> &'static str {

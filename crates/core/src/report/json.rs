@@ -7,7 +7,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::trajectory::rows::RowAudit;
 
-use crate::sources::Warning;
+use crate::align::time_offset::OffsetMethod;
+use crate::diag::Warning;
+use crate::metrics::lever::LeverCorrection;
+use crate::params::Platform;
+use crate::sources::StampSource;
 
 /// Current report layout version.
 pub const SCHEMA_VERSION: u32 = 1;
@@ -52,7 +56,7 @@ pub struct Input {
 /// Every parameter that shaped the numbers.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Parameters {
-    pub platform: String,
+    pub platform: Platform,
     pub curvature_eps_m: f64,
     pub path_eps_m: f64,
     pub theta_max_rad: f64,
@@ -60,13 +64,13 @@ pub struct Parameters {
     pub windows_m: Vec<f64>,
     pub overlap: f64,
     pub lever_arm_m: f64,
-    pub lever_correction: String,
+    pub lever_correction: LeverCorrection,
     pub max_offset_s: f64,
     pub grid_s: f64,
-    pub offset_method: String,
+    pub offset_method: OffsetMethod,
     /// The offset given with `--time-offset`, if any.
     pub time_offset_s: Option<f64>,
-    pub stamp: String,
+    pub stamp: StampSource,
     pub origin: Option<[f64; 3]>,
     /// The crop, absolute seconds on the reference clock.
     pub t_start: Option<f64>,
@@ -154,7 +158,7 @@ pub struct ExtrinsicsReport {
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct TimeOffsetReport {
     /// The method whose answer is reported (`given` when `--time-offset` was used).
-    pub method: String,
+    pub method: OffsetSource,
     /// Its offset, seconds (t_est + offset = reference clock).
     pub offset_s: f64,
     /// The offset applied before Drift Error (0 when the search was weak and none was given).
@@ -162,7 +166,7 @@ pub struct TimeOffsetReport {
     pub correlation: Option<f64>,
     pub confidence: Option<f64>,
     /// `ok`, `weak` or `given`.
-    pub status: String,
+    pub status: TimeOffsetStatus,
     /// Every method that ran.
     pub methods: Vec<OffsetMethodReport>,
     /// Why this answer was applied (or none).
@@ -211,6 +215,116 @@ pub struct TimeOffsetReport {
     pub profile_step_s: Option<f64>,
 }
 
+/// Whether the applied clock offset can be trusted.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TimeOffsetStatus {
+    /// A confident search: the offset (and its clock model) was applied.
+    Ok,
+    /// No confident peak: nothing was applied (`applied_s` 0), a warning says so.
+    #[default]
+    Weak,
+    /// Given with `--time-offset`: applied as given, not searched.
+    Given,
+}
+
+impl TimeOffsetStatus {
+    /// As written in the report.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            TimeOffsetStatus::Ok => "ok",
+            TimeOffsetStatus::Weak => "weak",
+            TimeOffsetStatus::Given => "given",
+        }
+    }
+}
+
+/// How one search method fared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MethodStatus {
+    /// A clear, unique peak.
+    Ok,
+    /// A flat or ambiguous peak.
+    Weak,
+    /// The method could not run on these data (`error` says why).
+    Failed,
+}
+
+impl MethodStatus {
+    /// As written in the report.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MethodStatus::Ok => "ok",
+            MethodStatus::Weak => "weak",
+            MethodStatus::Failed => "failed",
+        }
+    }
+}
+
+impl From<crate::align::time_offset::OffsetStatus> for MethodStatus {
+    fn from(s: crate::align::time_offset::OffsetStatus) -> Self {
+        match s {
+            crate::align::time_offset::OffsetStatus::Ok => MethodStatus::Ok,
+            crate::align::time_offset::OffsetStatus::Weak => MethodStatus::Weak,
+        }
+    }
+}
+
+/// Where a reported offset came from: a search method, or the user (`given`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OffsetSource {
+    /// `--time-offset`.
+    Given,
+    #[default]
+    Auto,
+    Speed,
+    SignedCurvature,
+    Curvature,
+}
+
+impl From<OffsetMethod> for OffsetSource {
+    fn from(m: OffsetMethod) -> Self {
+        match m {
+            OffsetMethod::Auto => OffsetSource::Auto,
+            OffsetMethod::Speed => OffsetSource::Speed,
+            OffsetMethod::SignedCurvature => OffsetSource::SignedCurvature,
+            OffsetMethod::Curvature => OffsetSource::Curvature,
+        }
+    }
+}
+
+impl OffsetSource {
+    /// As written in the report.
+    pub fn as_str(self) -> &'static str {
+        self.method().map_or("given", |m| m.as_str())
+    }
+
+    /// The search method, unless the offset was given.
+    pub fn method(self) -> Option<OffsetMethod> {
+        match self {
+            OffsetSource::Given => None,
+            OffsetSource::Auto => Some(OffsetMethod::Auto),
+            OffsetSource::Speed => Some(OffsetMethod::Speed),
+            OffsetSource::SignedCurvature => Some(OffsetMethod::SignedCurvature),
+            OffsetSource::Curvature => Some(OffsetMethod::Curvature),
+        }
+    }
+}
+
+/// The words of the typed statuses, as the report writes them.
+macro_rules! display_as_str {
+    ($($t:ty),*) => {$(
+        impl std::fmt::Display for $t {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.as_str())
+            }
+        }
+    )*};
+}
+display_as_str!(TimeOffsetStatus, MethodStatus, OffsetSource);
+
 /// One segment of a piecewise clock model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct OffsetSegmentReport {
@@ -232,12 +346,12 @@ pub struct OffsetProfilePoint {
 /// One time-offset method's answer.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct OffsetMethodReport {
-    pub method: String,
+    pub method: OffsetMethod,
     pub offset_s: Option<f64>,
     pub correlation: Option<f64>,
     pub confidence: Option<f64>,
     /// `ok`, `weak`, or `failed` (then `error` says why).
-    pub status: String,
+    pub status: MethodStatus,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub error: Option<String>,
     /// ρ − ρ₂: the peak over the best NCC outside its main lobe.
@@ -252,7 +366,7 @@ pub struct OffsetMethodReport {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DriftErrorReport {
     pub window_m: f64,
-    pub lever_correction: String,
+    pub lever_correction: LeverCorrection,
     pub windows: usize,
     pub dropped_windows: usize,
     pub rmse: Option<f64>,

@@ -235,7 +235,7 @@ impl Recording for Mission {
         match *self.truncated.lock().unwrap_or_else(|e| e.into_inner()) {
             Some((i, local)) => self.parts[i].truncation_warning(local),
             None => Warning {
-                code: "truncated_recording".into(),
+                code: crate::diag::WarningCode::TruncatedRecording,
                 message: format!(
                     "{}: recording cut short at byte {offset}; read up to the last complete record",
                     self.path.display()

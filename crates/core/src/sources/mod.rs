@@ -26,7 +26,8 @@ use crate::error::Result;
 use crate::trajectory::Trajectory;
 
 /// Which clock stamps a sample.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum StampSource {
     /// `header.stamp`: when the sensor measured (default).
     #[default]

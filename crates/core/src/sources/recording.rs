@@ -85,7 +85,7 @@ pub trait Recording {
     /// The warning for a recording cut short at byte `offset`.
     fn truncation_warning(&self, offset: u64) -> Warning {
         Warning {
-            code: "truncated_recording".into(),
+            code: crate::diag::WarningCode::TruncatedRecording,
             message: format!(
                 "{}: recording cut short at byte {offset} (the recorder probably stopped abruptly); read up to the last complete record",
                 self.path().display()

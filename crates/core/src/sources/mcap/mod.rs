@@ -95,7 +95,7 @@ impl Recording for McapSource {
 
     fn truncation_warning(&self, offset: u64) -> Warning {
         Warning {
-            code: "truncated_recording".into(),
+            code: crate::diag::WarningCode::TruncatedRecording,
             message: format!(
                 "{}: recording cut short at byte {offset} (no footer; the recorder probably stopped abruptly); read up to the last complete record",
                 self.path.display()
