@@ -6,7 +6,7 @@
 //! core crate [`trajdrift_core`], re-exported here.
 
 pub use trajdrift_core::{
-    align, clock, decode, diag, error, metrics, output, params, report, simulate, sources,
+    align, clock, decode, diag, error, metrics, output, params, report, simulate, sources, stats,
     trajectory,
 };
 pub use trajdrift_core::{Error, Result, Trajectory};

@@ -11,9 +11,9 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::metrics::stats::summarize;
 use crate::output::write_output;
 use crate::report::json::Report;
+use crate::stats::summarize;
 
 /// Marks a per-mission result file.
 pub const MISSION_KIND: &str = "trajdrift.mission";

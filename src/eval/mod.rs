@@ -19,11 +19,11 @@ use crate::align::time_offset::{
 use crate::clock::ClockCorrection;
 use crate::diag::{Warning, WarningCode};
 use crate::error::{Error, Result};
-use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult};
+use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult, DriftWindow};
 use crate::report::json::{
     AutoParameters, DriftErrorReport, EstimateReport, Input, MethodStatus, OffsetMethodReport,
     OffsetProfilePoint, OffsetSegmentReport, OffsetSource, Parameters, Report, TimeOffsetReport,
-    TimeOffsetStatus, Tool, TopicReport, WindowReport, SCHEMA_VERSION,
+    TimeOffsetStatus, Tool, TopicReport, SCHEMA_VERSION,
 };
 use crate::sources::Progress;
 use config::EvalConfig;
@@ -473,13 +473,10 @@ fn drift_report(r: &DriftErrorResult, t0_s: f64) -> DriftErrorReport {
         per_window: r
             .windows
             .iter()
-            .map(|w| WindowReport {
+            .map(|w| DriftWindow {
                 t_start: w.t_start + t0_s,
                 t_end: w.t_end + t0_s,
-                ref_length_m: w.ref_length_m,
-                est_length_m: w.est_length_m,
-                alpha: w.alpha,
-                de: w.de,
+                ..*w
             })
             .collect(),
         scale: r.lever_fit.map(|f| f.scale),

@@ -14,12 +14,6 @@ pub struct DeDistribution {
     pub groups: Vec<(String, Vec<f64>)>,
 }
 
-fn quantile(sorted: &[f64], q: f64) -> f64 {
-    let pos = q * (sorted.len() - 1) as f64;
-    let (i, f) = (pos.floor() as usize, pos.fract());
-    sorted[i] + f * (sorted[(i + 1).min(sorted.len() - 1)] - sorted[i])
-}
-
 impl Draw for DeDistribution {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
         let n = self.groups.len().max(1);
@@ -63,7 +57,11 @@ impl Draw for DeDistribution {
                 continue;
             }
             s.sort_by(f64::total_cmp);
-            let (q1, med, q3) = (quantile(&s, 0.25), quantile(&s, 0.5), quantile(&s, 0.75));
+            let (q1, med, q3) = (
+                crate::stats::quantile_sorted(&s, 0.25),
+                crate::stats::quantile_sorted(&s, 0.5),
+                crate::stats::quantile_sorted(&s, 0.75),
+            );
             chart
                 .draw_series([Rectangle::new(
                     [(x - 0.25, q1), (x + 0.25, q3)],

@@ -20,6 +20,7 @@ pub mod params;
 pub mod report;
 pub mod simulate;
 pub mod sources;
+pub mod stats;
 pub mod trajectory;
 
 pub use error::{Error, Result};

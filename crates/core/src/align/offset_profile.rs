@@ -22,6 +22,7 @@
 //! and the method's own bias of a few ms). tests/time_offset_profile.rs `coverage_table` shows the
 //! coverage of 2σ over simulated missions.
 
+pub use crate::stats::median;
 use rayon::prelude::*;
 
 use crate::align::time_offset::{search_signals, OffsetMethod, OffsetParams, SignalView};
@@ -228,21 +229,6 @@ pub fn sigma_scale(windows: &[ProfileWindow], stride: usize) -> f64 {
         return 1.0;
     }
     median(&chi2).map_or(1.0, |m| (m / CHI2_1_MEDIAN).sqrt().max(1.0))
-}
-
-/// The median of `v` (`None` when empty).
-pub fn median(v: &[f64]) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let m = s.len() / 2;
-    Some(if s.len() % 2 == 1 {
-        s[m]
-    } else {
-        0.5 * (s[m - 1] + s[m])
-    })
 }
 
 /// Indices of the sorted `t` inside [lo, hi].

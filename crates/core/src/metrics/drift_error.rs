@@ -13,10 +13,10 @@ use super::decimate::DecimatedPath;
 use super::lever::{segment_alpha, CurvatureTrack, LeverCorrection};
 use super::lever_fit::{fit_alpha, fit_scale_and_lever, FitSample, HeadingTrack, LeverFit};
 use super::rotation_in_place::{rotations_in_place, RotationInPlaceParams};
-use super::stats::{summarize, Summary};
 use super::windows::{gaps, path_windows};
 use crate::align::curvature::{curvature_signature, CurvatureParams};
 use crate::error::{Error, Result};
+use crate::stats::{summarize, Summary};
 
 /// The parameters of the Drift Error.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]

@@ -34,6 +34,7 @@
 //! Hand-written: a two-unknown least squares with trimming is a few lines; no crate does this fit.
 
 use super::decimate::DecimatedPath;
+use crate::stats::median;
 
 /// Above this standard error (metres) the lateral lever arm is not identifiable and is set to 0.
 pub const MAX_LEVER_STD_ERR_M: f64 = 0.1;
@@ -180,19 +181,6 @@ fn scale_only(samples: &[FitSample], used: &[bool]) -> Option<(f64, usize)> {
     (sll > 0.0).then(|| (sly / sll, n))
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Fits s and d over the windows (see the module doc). `None` without any usable window.
 pub fn fit_scale_and_lever(samples: &[FitSample]) -> Option<LeverFit> {
     let base: Vec<bool> = samples
@@ -228,7 +216,7 @@ pub fn fit_scale_and_lever(samples: &[FitSample]) -> Option<LeverFit> {
             .filter(|(_, &u)| u)
             .map(|(r, _)| r.abs())
             .collect();
-        let limit = 3.0 * 1.4826 * median(kept);
+        let limit = 3.0 * 1.4826 * median(&kept).unwrap_or(0.0);
         let next: Vec<bool> = samples
             .iter()
             .zip(&base)

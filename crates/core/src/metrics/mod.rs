@@ -6,5 +6,4 @@ pub mod lever;
 pub mod lever_fit;
 pub mod rotation_in_place;
 pub mod standard;
-pub mod stats;
 pub mod windows;

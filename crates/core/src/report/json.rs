@@ -9,6 +9,7 @@ use crate::trajectory::rows::RowAudit;
 
 use crate::align::time_offset::OffsetMethod;
 use crate::diag::Warning;
+use crate::metrics::drift_error::DriftWindow;
 use crate::metrics::lever::LeverCorrection;
 use crate::params::Platform;
 use crate::sources::StampSource;
@@ -382,7 +383,7 @@ pub struct DriftErrorReport {
     pub discarded_fraction: f64,
     /// Rotation in place (the reference still, the estimate sweeping an arc): excluded, [start, end] s.
     pub excluded_intervals: Vec<[f64; 2]>,
-    pub per_window: Vec<WindowReport>,
+    pub per_window: Vec<DriftWindow>,
     /// `fit` correction only: the fitted path scale s of L_est = s·(L_ref − d·Δψ) (1.02 = estimate 2 %
     /// long); null for other corrections.
     #[serde(default)]
@@ -392,15 +393,4 @@ pub struct DriftErrorReport {
     /// tell; null for other corrections.
     #[serde(default)]
     pub lateral_lever_m: Option<f64>,
-}
-
-/// One Drift Error window.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct WindowReport {
-    pub t_start: f64,
-    pub t_end: f64,
-    pub ref_length_m: f64,
-    pub est_length_m: f64,
-    pub alpha: f64,
-    pub de: f64,
 }

@@ -118,7 +118,7 @@ pub struct ErrorStats {
 impl ErrorStats {
     /// Summarises `values` (non-empty).
     pub fn of(values: &[f64]) -> Option<ErrorStats> {
-        let s = crate::metrics::stats::summarize(values)?;
+        let s = crate::stats::summarize(values)?;
         Some(ErrorStats {
             rmse: s.rmse,
             mean: s.mean,

@@ -33,7 +33,7 @@ pub struct Summary {
 /// Summarizes `values`, ignoring non-finite ones. `None` when no finite value is left.
 ///
 /// ```
-/// use trajdrift_core::metrics::stats::summarize;
+/// use trajdrift_core::stats::summarize;
 /// let s = summarize(&[1.0, 2.0, 3.0, 4.0]).unwrap();
 /// assert_eq!(s.median, 2.5);
 /// assert_eq!(s.q1, 1.75); // numpy.quantile([1, 2, 3, 4], 0.25)
@@ -65,8 +65,30 @@ pub fn summarize(values: &[f64]) -> Option<Summary> {
     })
 }
 
+/// The median of `v`: the middle value, or the mean of the two middle ones (`None` when empty).
+///
+/// ```
+/// use trajdrift_core::stats::median;
+/// assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
+/// assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), Some(2.5));
+/// assert_eq!(median(&[]), None);
+/// ```
+pub fn median(v: &[f64]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let m = s.len() / 2;
+    Some(if s.len() % 2 == 1 {
+        s[m]
+    } else {
+        0.5 * (s[m - 1] + s[m])
+    })
+}
+
 /// The `q` quantile (0 ≤ q ≤ 1) of sorted, non-empty `v`, linear between closest ranks (numpy default).
-fn quantile_sorted(v: &[f64], q: f64) -> f64 {
+pub fn quantile_sorted(v: &[f64], q: f64) -> f64 {
     let h = (v.len() - 1) as f64 * q.clamp(0.0, 1.0);
     let lo = h.floor() as usize;
     let hi = (lo + 1).min(v.len() - 1);
