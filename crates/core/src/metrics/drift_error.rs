@@ -13,7 +13,7 @@ use super::decimate::DecimatedPath;
 use super::lever::{segment_alpha, CurvatureTrack, LeverCorrection};
 use super::lever_fit::{fit_alpha, fit_scale_and_lever, FitSample, HeadingTrack, LeverFit};
 use super::rotation_in_place::{rotations_in_place, RotationInPlaceParams};
-use super::windows::{gaps, path_windows};
+use super::windows::{gaps, path_windows, PathWindow};
 use crate::align::curvature::{curvature_signature, CurvatureParams};
 use crate::error::{Error, Result};
 use crate::stats::{summarize, Summary};
@@ -185,62 +185,11 @@ pub fn drift_error_windows(
             let mut windows: Vec<DriftWindow> = layout
                 .windows
                 .iter()
-                .map(|win| {
-                    let ref_len = ref_path.s[win.end] - ref_path.s[win.start];
-                    let est_raw = est_path.length_between(win.t_start, win.t_end);
-                    let est_corr = match &tracks {
-                        None => est_raw,
-                        Some((kr, ke)) => (win.start..win.end)
-                            .map(|a| {
-                                let (ta, tb) = (ref_path.t[a], ref_path.t[a + 1]);
-                                let alpha = segment_alpha(
-                                    kr.mean_between(ta, tb),
-                                    ke.mean_between(ta, tb),
-                                    params.lever_arm_m,
-                                );
-                                alpha * est_path.length_between(ta, tb)
-                            })
-                            .sum(),
-                    };
-                    DriftWindow {
-                        t_start: win.t_start,
-                        t_end: win.t_end,
-                        ref_length_m: ref_len,
-                        est_length_m: est_raw,
-                        alpha: if est_raw > 0.0 {
-                            est_corr / est_raw
-                        } else {
-                            1.0
-                        },
-                        de: (1.0 - est_corr / ref_len).abs(),
-                    }
-                })
+                .map(|win| window_de(win, &ref_path, &est_path, tracks.as_ref(), params))
                 .collect();
-            let lever_fit = headings.as_ref().and_then(|h| {
-                let dpsi: Vec<f64> = layout
-                    .windows
-                    .iter()
-                    .map(|win| h.change(win.start, win.end))
-                    .collect();
-                let samples: Vec<FitSample> = windows
-                    .iter()
-                    .zip(&dpsi)
-                    .map(|(w, &psi)| FitSample {
-                        ref_length_m: w.ref_length_m,
-                        est_length_m: w.est_length_m,
-                        heading_change_rad: psi,
-                        usable: !excluded
-                            .iter()
-                            .any(|iv| iv[0] < w.t_end && iv[1] > w.t_start),
-                    })
-                    .collect();
-                let fit = fit_scale_and_lever(&samples)?;
-                for (w, &psi) in windows.iter_mut().zip(&dpsi) {
-                    w.alpha = fit_alpha(w.ref_length_m, psi, fit.lateral_lever_m);
-                    w.de = (1.0 - w.alpha * w.est_length_m / w.ref_length_m).abs();
-                }
-                Some(fit)
-            });
+            let lever_fit = headings
+                .as_ref()
+                .and_then(|h| apply_lever_fit(&mut windows, &layout.windows, h, &excluded));
             let des: Vec<f64> = windows.iter().map(|w| w.de).collect();
             Ok(DriftErrorResult {
                 window_m: w,
@@ -255,6 +204,79 @@ pub fn drift_error_windows(
             })
         })
         .collect()
+}
+
+/// One window's Drift Error: the two path lengths over its time span, the estimate's corrected per
+/// curvature segment by the paper's α when `tracks` (reference, estimate) are given.
+fn window_de(
+    win: &PathWindow,
+    ref_path: &DecimatedPath,
+    est_path: &DecimatedPath,
+    tracks: Option<&(CurvatureTrack, CurvatureTrack)>,
+    params: &DriftParams,
+) -> DriftWindow {
+    let ref_len = ref_path.s[win.end] - ref_path.s[win.start];
+    let est_raw = est_path.length_between(win.t_start, win.t_end);
+    let est_corr = match tracks {
+        None => est_raw,
+        Some((kr, ke)) => (win.start..win.end)
+            .map(|a| {
+                let (ta, tb) = (ref_path.t[a], ref_path.t[a + 1]);
+                let alpha = segment_alpha(
+                    kr.mean_between(ta, tb),
+                    ke.mean_between(ta, tb),
+                    params.lever_arm_m,
+                );
+                alpha * est_path.length_between(ta, tb)
+            })
+            .sum(),
+    };
+    DriftWindow {
+        t_start: win.t_start,
+        t_end: win.t_end,
+        ref_length_m: ref_len,
+        est_length_m: est_raw,
+        alpha: if est_raw > 0.0 {
+            est_corr / est_raw
+        } else {
+            1.0
+        },
+        de: (1.0 - est_corr / ref_len).abs(),
+    }
+}
+
+/// The fitted lever correction (`--lever-correction fit`): the scale and lateral lever fitted over
+/// all `windows` (their heading changes from `headings`; rotations in place, `excluded`, left out),
+/// then each window's α and DE from the fit. `None` when the fit fails (the windows keep their
+/// uncorrected DE).
+fn apply_lever_fit(
+    windows: &mut [DriftWindow],
+    layout: &[PathWindow],
+    headings: &HeadingTrack,
+    excluded: &[[f64; 2]],
+) -> Option<LeverFit> {
+    let dpsi: Vec<f64> = layout
+        .iter()
+        .map(|win| headings.change(win.start, win.end))
+        .collect();
+    let samples: Vec<FitSample> = windows
+        .iter()
+        .zip(&dpsi)
+        .map(|(w, &psi)| FitSample {
+            ref_length_m: w.ref_length_m,
+            est_length_m: w.est_length_m,
+            heading_change_rad: psi,
+            usable: !excluded
+                .iter()
+                .any(|iv| iv[0] < w.t_end && iv[1] > w.t_start),
+        })
+        .collect();
+    let fit = fit_scale_and_lever(&samples)?;
+    for (w, &psi) in windows.iter_mut().zip(&dpsi) {
+        w.alpha = fit_alpha(w.ref_length_m, psi, fit.lateral_lever_m);
+        w.de = (1.0 - w.alpha * w.est_length_m / w.ref_length_m).abs();
+    }
+    Some(fit)
 }
 
 fn check_input(what: &str, t: &[f64], p: &[Vector3<f64>]) -> Result<()> {

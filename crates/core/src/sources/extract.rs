@@ -12,8 +12,7 @@ use nalgebra::Vector3;
 
 use crate::decode::{self, geodesy, Encoding, MessageKind, SamplePosition};
 use crate::error::{Error, Result};
-use crate::sources::recording::ChannelInfo;
-use crate::sources::recording::Recording;
+use crate::sources::recording::{ChannelInfo, Recording, StreamOutcome};
 use crate::sources::tf_chain::{self, ChainRequest, TfCollector};
 use crate::sources::Warning;
 use crate::sources::{
@@ -199,52 +198,138 @@ pub fn extract(
         return Ok(Extraction::default());
     }
     let path = rec.path();
-    let mut chains: Vec<ChainRequest> = Vec::new();
-    let mut plain: Vec<String> = Vec::new();
-    for t in topics {
-        match tf_chain::parse_chain_topic(t) {
-            Some(r) => {
-                let r = r?;
-                if !chains.contains(&r) {
-                    chains.push(r);
-                }
-            }
-            None => plain.push(t.clone()),
-        }
-    }
-    let topics_plain = &plain;
+    let requests = Requests::of(topics, options)?;
     // Fail fast on a wrong topic when an index lists the channels.
     if let Some(channels) = rec.known_channels() {
-        check_requested(path, topics_plain, &channels)?;
-        check_tf_channels(path, &chains, &channels)?;
+        check_requested(path, &requests.plain, &channels)?;
+        check_tf_channels(path, &requests.chains, &channels)?;
     }
-    // `tf-static:` levers look up static transforms in the same pass.
-    let mut lookup_frames: Vec<ChainRequest> = options
+    let pass = read_pass(rec, &requests, options, progress)?;
+    check_requested(path, &requests.plain, &pass.outcome.channels).map_err(|e| {
+        match (e, pass.outcome.truncated_at) {
+            (Error::TopicNotFound { topic, .. }, Some(offset)) => Error::Damaged {
+                path: path.to_path_buf(),
+                offset,
+                detail: format!(
+                    "the recording is cut short or damaged there, and topic {topic} was not found before"
+                ),
+            },
+            (e, _) => e,
+        }
+    })?;
+    check_tf_channels(path, &requests.chains, &pass.outcome.channels)?;
+    let tree = pass.tf.map(TfCollector::finish).unwrap_or_default();
+    let static_transforms = options
         .static_lookups
         .iter()
-        .map(|(from, to)| ChainRequest {
-            topic: String::new(),
-            parent: tf_chain::frame_name(from).to_string(),
-            child: tf_chain::frame_name(to).to_string(),
+        .map(|(from, to)| StaticTransform {
+            from: from.clone(),
+            to: to.clone(),
+            pose: tree.static_transform(from, to),
         })
         .collect();
-    lookup_frames.extend(chains.iter().cloned());
-    let want_tf = !lookup_frames.is_empty();
-    let mut tf = want_tf.then(|| TfCollector::new(&lookup_frames));
-    let mut tf_index: HashMap<u16, u64> = HashMap::new();
+    let chain_topics = requests
+        .chains
+        .iter()
+        .map(|r| chain_topic(&tree, path, r))
+        .collect::<Result<Vec<_>>>()?;
+    let warnings = pass
+        .outcome
+        .truncated_at
+        .map(|offset| rec.truncation_warning(offset))
+        .into_iter()
+        .collect();
+    let plain = finish_topics(
+        pass.accumulators,
+        &requests.unique,
+        &pass.outcome.channels,
+        options,
+    )?;
+    Ok(Extraction {
+        topics: in_request_order(topics, &requests.unique, plain, &chain_topics),
+        warnings,
+        static_transforms,
+    })
+}
 
-    // Each distinct requested topic once; `unique[i]` gets accumulator `i`.
-    let mut unique: Vec<&str> = Vec::new();
-    for t in topics_plain {
-        if !unique.contains(&t.as_str()) {
-            unique.push(t.as_str());
+/// What one extraction asks for: TF chains, plain topics (each distinct one once, in `unique`), and
+/// the frames the chains and the `tf-static:` lookups need.
+struct Requests<'a> {
+    chains: Vec<ChainRequest>,
+    plain: Vec<String>,
+    unique: Vec<&'a str>,
+    lookup_frames: Vec<ChainRequest>,
+}
+
+impl<'a> Requests<'a> {
+    fn of(topics: &'a [String], options: &ExtractOptions) -> Result<Requests<'a>> {
+        let mut chains: Vec<ChainRequest> = Vec::new();
+        let mut plain: Vec<String> = Vec::new();
+        let mut unique: Vec<&str> = Vec::new();
+        for t in topics {
+            match tf_chain::parse_chain_topic(t) {
+                Some(r) => {
+                    let r = r?;
+                    if !chains.contains(&r) {
+                        chains.push(r);
+                    }
+                }
+                None => {
+                    plain.push(t.clone());
+                    if !unique.contains(&t.as_str()) {
+                        unique.push(t.as_str());
+                    }
+                }
+            }
         }
+        // `tf-static:` levers look up static transforms in the same pass.
+        let mut lookup_frames: Vec<ChainRequest> = options
+            .static_lookups
+            .iter()
+            .map(|(from, to)| ChainRequest {
+                topic: String::new(),
+                parent: tf_chain::frame_name(from).to_string(),
+                child: tf_chain::frame_name(to).to_string(),
+            })
+            .collect();
+        lookup_frames.extend(chains.iter().cloned());
+        Ok(Requests {
+            chains,
+            plain,
+            unique,
+            lookup_frames,
+        })
     }
+}
+
+/// What the pass over the recording collected.
+struct Pass {
+    /// Per distinct plain topic (`Requests::unique`), `None` when no message came.
+    accumulators: Vec<Option<Accumulator>>,
+    /// The `/tf` and `/tf_static` edges, when chains or lookups asked for them.
+    tf: Option<TfCollector>,
+    outcome: StreamOutcome,
+}
+
+/// The one streaming pass: routes each message of a requested topic to its accumulator (decoded by
+/// its schema and encoding, invalid samples counted and dropped) and `/tf` edges to the collector.
+fn read_pass(
+    rec: &dyn Recording,
+    requests: &Requests<'_>,
+    options: &ExtractOptions,
+    progress: Progress<'_>,
+) -> Result<Pass> {
+    let path = rec.path();
+    let unique = &requests.unique;
+    let want_tf = !requests.lookup_frames.is_empty();
+    let mut tf = want_tf.then(|| TfCollector::new(&requests.lookup_frames));
+    let mut tf_index: HashMap<u16, u64> = HashMap::new();
     let mut accumulators: Vec<Option<Accumulator>> = unique.iter().map(|_| None).collect();
     let positions_only = |topic: &str| options.positions_only.iter().any(|t| t == topic);
     // Channel id → (accumulator index, encoding), `None` for a channel whose type differs from the
     // topic's first.
     let mut route: HashMap<u16, Option<(usize, Encoding)>> = HashMap::new();
+    let log_stamp = |log_time: u64| i64::try_from(log_time).unwrap_or(i64::MAX);
 
     let outcome = rec.pass(
         &mut |c| {
@@ -259,7 +344,7 @@ pub fn extract(
                 *i += 1;
                 let stamp = match options.stamp {
                     StampSource::Header => None,
-                    StampSource::Log => Some(i64::try_from(m.log_time).unwrap_or(i64::MAX)),
+                    StampSource::Log => Some(log_stamp(m.log_time)),
                 };
                 tf.push(tf_chain::is_static_channel(c), edges, stamp);
                 return Ok(());
@@ -293,7 +378,7 @@ pub fn extract(
             }
             let stamp_ns = match options.stamp {
                 StampSource::Header => sample.stamp_ns,
-                StampSource::Log => i64::try_from(m.log_time).unwrap_or(i64::MAX),
+                StampSource::Log => log_stamp(m.log_time),
             };
             let position = match sample.position {
                 SamplePosition::Local(p) => p,
@@ -308,61 +393,48 @@ pub fn extract(
             Ok(())
         },
     )?;
-    check_requested(path, topics_plain, &outcome.channels).map_err(|e| {
-        match (e, outcome.truncated_at) {
-            (Error::TopicNotFound { topic, .. }, Some(offset)) => Error::Damaged {
-                path: path.to_path_buf(),
-                offset,
-                detail: format!(
-                    "the recording is cut short or damaged there, and topic {topic} was not found before"
-                ),
-            },
-            (e, _) => e,
-        }
-    })?;
-    check_tf_channels(path, &chains, &outcome.channels)?;
-    let tree = tf.map(TfCollector::finish).unwrap_or_default();
-    let mut chain_topics = Vec::with_capacity(chains.len());
-    let static_transforms = options
-        .static_lookups
-        .iter()
-        .map(|(from, to)| StaticTransform {
-            from: from.clone(),
-            to: to.clone(),
-            pose: tree.static_transform(from, to),
-        })
-        .collect();
-    for r in &chains {
-        let c = tree.chain(path, r)?;
-        chain_topics.push(ExtractedTopic {
-            topic: r.topic.clone(),
-            type_name: tf_chain::CHAIN_TYPE_NAME.to_string(),
-            trajectory: c.composed.trajectory,
-            messages: c.edges_read,
-            invalid_dropped: c.composed.outside_span,
-            duplicate_stamps: 0,
-            rows: RowAudit {
-                read: c.edges_read,
-                outside_tf_span: c.composed.outside_span,
-                ..RowAudit::default()
-            },
-            geodetic_origin: None,
-        });
-    }
+    Ok(Pass {
+        accumulators,
+        tf,
+        outcome,
+    })
+}
 
-    let mut warnings = Vec::new();
-    if let Some(offset) = outcome.truncated_at {
-        warnings.push(rec.truncation_warning(offset));
-    }
+/// The trajectory of the TF chain `r`, composed from the collected edges.
+fn chain_topic(tree: &tf_chain::TfTree, path: &Path, r: &ChainRequest) -> Result<ExtractedTopic> {
+    let c = tree.chain(path, r)?;
+    Ok(ExtractedTopic {
+        topic: r.topic.clone(),
+        type_name: tf_chain::CHAIN_TYPE_NAME.to_string(),
+        trajectory: c.composed.trajectory,
+        messages: c.edges_read,
+        invalid_dropped: c.composed.outside_span,
+        duplicate_stamps: 0,
+        rows: RowAudit {
+            read: c.edges_read,
+            outside_tf_span: c.composed.outside_span,
+            ..RowAudit::default()
+        },
+        geodetic_origin: None,
+    })
+}
 
-    // Topics without a message still get their (empty) trajectory of the right kind.
+/// The plain topics' trajectories once the pass is done: sorted and cleaned (every dropped row
+/// counted), geodetic ones moved to ENU around the given origin or the first valid fix; a topic
+/// without a message gets an empty trajectory of its kind.
+fn finish_topics(
+    accumulators: Vec<Option<Accumulator>>,
+    unique: &[&str],
+    channels: &[ChannelInfo],
+    options: &ExtractOptions,
+) -> Result<Vec<ExtractedTopic>> {
+    let positions_only = |topic: &str| options.positions_only.iter().any(|t| t == topic);
     let mut accumulators: Vec<Accumulator> = accumulators
         .into_iter()
-        .zip(&unique)
+        .zip(unique)
         .map(|(acc, topic)| {
             acc.or_else(|| {
-                outcome
-                    .channels
+                channels
                     .iter()
                     .filter(|c| c.topic == *topic)
                     .find_map(channel_kind)
@@ -381,7 +453,6 @@ pub fn extract(
             audit
         })
         .collect();
-
     // The ENU origin: given, or the first valid fix (by stamp) of the first geodetic topic
     // requested that has one.
     let origin = options.origin.or_else(|| {
@@ -391,11 +462,10 @@ pub fn extract(
             .find_map(|a| a.trajectory.positions.first())
             .map(|p| [p.x, p.y, p.z])
     });
-
-    let mut done: Vec<Option<ExtractedTopic>> = accumulators
+    Ok(accumulators
         .into_iter()
         .zip(audits)
-        .zip(&unique)
+        .zip(unique)
         .map(|((mut acc, rows), topic)| {
             let mut geodetic_origin = None;
             if acc.kind.is_geodetic() {
@@ -407,7 +477,7 @@ pub fn extract(
                     geodetic_origin = Some(o);
                 }
             }
-            Some(ExtractedTopic {
+            ExtractedTopic {
                 topic: topic.to_string(),
                 type_name: acc.kind.type_name().to_string(),
                 trajectory: acc.trajectory,
@@ -416,30 +486,35 @@ pub fn extract(
                 duplicate_stamps: rows.duplicate_stamp,
                 rows,
                 geodetic_origin,
-            })
+            }
         })
-        .collect();
-    // In request order; a topic requested twice is cloned.
-    let mut topics_out = Vec::with_capacity(topics.len());
+        .collect())
+}
+
+/// The extracted topics in the order they were requested (`plain[i]` is `unique[i]`'s); a topic
+/// requested twice is cloned.
+fn in_request_order(
+    topics: &[String],
+    unique: &[&str],
+    plain: Vec<ExtractedTopic>,
+    chains: &[ExtractedTopic],
+) -> Vec<ExtractedTopic> {
+    let mut done: Vec<Option<ExtractedTopic>> = plain.into_iter().map(Some).collect();
+    let mut out = Vec::with_capacity(topics.len());
     for t in topics {
-        if let Some(c) = chain_topics.iter().find(|c| &c.topic == t) {
-            topics_out.push(c.clone());
+        if let Some(c) = chains.iter().find(|c| &c.topic == t) {
+            out.push(c.clone());
             continue;
         }
         let i = unique.iter().position(|u| u == t).unwrap_or(0);
-        let first = done[i].take();
-        let next = match first {
+        let next = match done.get_mut(i).and_then(Option::take) {
             Some(x) => x,
-            None => match topics_out.iter().find(|x: &&ExtractedTopic| &x.topic == t) {
+            None => match out.iter().find(|x: &&ExtractedTopic| &x.topic == t) {
                 Some(x) => x.clone(),
                 None => continue,
             },
         };
-        topics_out.push(next);
+        out.push(next);
     }
-    Ok(Extraction {
-        topics: topics_out,
-        warnings,
-        static_transforms,
-    })
+    out
 }
