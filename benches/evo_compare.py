@@ -5,7 +5,7 @@
     python3 benches/evo_compare.py --rows     # only the extra rows on shared/evo-data
     python3 benches/evo_compare.py --speed    # only the 1 M-pose speed and memory bench
 
-1. Extra rows: relations, alignments and options beyond REFERENCE.md (which tests/evo_reference.rs
+1. Extra rows: relations, alignments and options beyond REFERENCE.md (which tests/it/evo_reference.rs
    checks in CI), run with evo and with trajdrift on $TRAJDRIFT_SHARED/evo-data; the seven statistics
    must print the same 6 decimals.
 2. Speed and memory: a TUM pair of 1 M poses (100 Hz, 10 000 s; written once into target/bench-evo/),

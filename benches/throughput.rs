@@ -1,4 +1,4 @@
-//! Throughput benchmark (issue "evaluate at the speed of reading"): how `trajdrift eval` with all
+//! Throughput benchmark (evaluating at the speed of reading): how `trajdrift eval` with all
 //! defaults compares with the floor, a bare stream of the same recording.
 //!
 //! `cargo bench --bench throughput` (reads `$TRAJDRIFT_SHARED`, default `../shared`). Prints, from one

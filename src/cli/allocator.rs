@@ -4,7 +4,7 @@
 //! Why: glibc's malloc raises its mmap threshold each time a mapped block is freed (up to 32 MiB);
 //! from then on blocks of that size come from the heap and the per-thread arenas, and freed ones stay
 //! there. An evaluation allocates and frees signals of tens of megabytes from several threads, so the
-//! process kept far more than it used: on the 2-hour bench recording (session 5), a peak RSS of 208 MiB
+//! process kept far more than it used: on the 2-hour bench recording (`cargo bench --bench throughput`), a peak RSS of 208 MiB
 //! for a live heap of about 150 MB (heaptrack). A fixed threshold of 1 MiB keeps every large block
 //! out of the arenas: the peak RSS falls to 141 MiB for about 3 % more time (`cargo bench --bench
 //! throughput` prints both; `MALLOC_MMAP_THRESHOLD_` in the environment still overrides it). Other

@@ -1,4 +1,4 @@
-//! The foundation issue's acceptance on the shared missions (written by an independent simulator):
+//! The core method's acceptance on the shared missions (written by an independent simulator):
 //! sample counts, the speed method's offset, the Drift Error median, rotation in place excluded, and
 //! invariance to a rigid transform of the estimate.
 

@@ -492,7 +492,7 @@ fn simulated_clock_step_is_found_piecewise() {
     assert_eq!(o.status.code(), Some(2));
 }
 
-/// `simulate --duration S --est-rate HZ` (issue 13's recording, scaled down): the route repeated and
+/// `simulate --duration S --est-rate HZ` (the throughput bench's recording, scaled down): the route repeated and
 /// cut to S seconds, the estimate at HZ; `--duration` and `--laps` exclude each other.
 #[test]
 fn simulate_takes_a_duration_and_an_estimate_rate() {

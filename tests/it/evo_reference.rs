@@ -100,7 +100,7 @@ fn json_carries_the_same_numbers() {
     assert_eq!(v["stats"]["n"], v["pairs"]);
 }
 
-/// The example: S-PTAM in KITTI 00 lags one frame; `--time-offset auto` finds it and evo's
+/// The motivating example: S-PTAM in KITTI 00 lags one frame; `--time-offset auto` finds it and evo's
 /// APE drops from 3.738 to 3.590 m.
 #[test]
 fn time_offset_auto_finds_the_sptam_lag() {

@@ -1,4 +1,4 @@
-//! Hostile inputs at the process boundary (issue 9): outputs that would overwrite an input, parameter
+//! Hostile inputs at the process boundary: outputs that would overwrite an input, parameter
 //! values out of range, damaged and truncated recordings, names with control characters, closed pipes,
 //! dropped rows, and a seeded mutation test of an MCAP and a bag under a 1 GB address-space limit.
 

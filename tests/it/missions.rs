@@ -1,4 +1,4 @@
-//! Missions of several recordings (issue 12): a GrandTour-like mission written by our simulator as
+//! Missions of several recordings: a GrandTour-like mission written by our simulator as
 //! per-sensor ROS 1 bags evaluates from its files, from its folder, with the GrandTour presets and
 //! with a TF chain across bags, giving the report one merged bag of the same messages gives; its
 //! `--annotate` output holds every input message; `topics` names the presets; a topic with two types

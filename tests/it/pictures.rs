@@ -1,4 +1,4 @@
-//! Figures, the HTML report and sweeps, at the process boundary (issue 15's acceptance):
+//! Figures, the HTML report and sweeps, at the process boundary:
 //! the HTML of a shared fixture renders in headless Chromium to a non-blank page and loads nothing
 //! from the network; `sweep --param eps-min` shows the paper's shape and equals single `eval` runs;
 //! a 2-hour mission's figures stay small.

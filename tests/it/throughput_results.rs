@@ -1,4 +1,4 @@
-//! The fast offset search (issue "evaluate at the speed of reading") changes how the answer is
+//! The fast offset search changes how the answer is
 //! computed, not the answer: on every shared mission, `eval` with all defaults gives the applied Δt
 //! within 1 ms and the Drift Error RMSE within 1e-4 of what the direct search gave before it
 //! (the table: trajdrift at f2e5065, `eval MISSION --reference /reference/position --estimate

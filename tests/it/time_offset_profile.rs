@@ -553,9 +553,9 @@ fn real_recordings_are_constant() {
 }
 
 /// The offset stage on the two-hour bench mission (60 laps): the whole-mission search, then what came
-/// after it before issue 10 (the clock drift's 2 thirds × (1 + 16 noise-injected) searches over ±2 s,
-/// replayed here with the same parameters) against the profile and model that replace it. Both run
-/// in this process, under the same load. Run with
+/// after it before the offset profile and the clock model (the clock drift's 2 thirds × (1 + 16
+/// noise-injected) searches over ±2 s, replayed here with the same parameters) against the profile
+/// and model that replace it. Both run in this process, under the same load. Run with
 /// `cargo test --release --test it -- --ignored --nocapture time_offset_profile::offset_stage_timing`.
 #[test]
 #[ignore]

@@ -3,9 +3,9 @@
 //! (samples of the sparser signal × lags) + (fine grid points), not (fine grid points × lags).
 //!
 //! Why: on a 2-hour mission the fine grid holds 7.2 M points; summing them at each of the 81 lags of
-//! the fine window, for three methods and the offset profile, took most of an evaluation (issue
-//! "evaluate at the speed of reading"). Decimating the sums instead (every 5–20 ms) moved Δt by up
-//! to 4.7 ms on the shared missions; this is the same sum, reorganised.
+//! the fine window, for three methods and the offset profile, took most of an evaluation. Decimating
+//! the sums instead (every 5–20 ms) moved Δt by up to 4.7 ms on the shared missions; this is the
+//! same sum, reorganised.
 //!
 //! How: on the fine grid both signals are linear interpolations of their samples
 //! ([`crate::align::grid`]). Between two consecutive samples of the sparser signal S its grid values

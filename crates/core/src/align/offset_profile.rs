@@ -19,7 +19,7 @@
 //! √(σ²_{i−2} + 4σ²_i + σ²_{i+2}) is a unit normal. The scale f² is the median of their squares
 //! over the median of χ²₁ (0.455): robust to the few second differences a step makes. f ≥ 1 (the
 //! residual is never taken as too large), and each σ is at least [`SIGMA_FLOOR_S`] (the fine grid
-//! and the method's own bias of a few ms). tests/time_offset_profile.rs `coverage_table` shows the
+//! and the method's own bias of a few ms). tests/it/time_offset_profile.rs `coverage_table` shows the
 //! coverage of 2σ over simulated missions.
 
 pub use crate::stats::median;

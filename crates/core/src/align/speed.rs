@@ -7,7 +7,7 @@
 //! v = |p_k − p_j| / (t_k − t_j), stamped at the chord's mid-time (t_j + t_k)/2, where a chord-average
 //! speed is centred whatever the sampling. Noise drops to ≈ √2·σ/w (0.014 m/s for 2 cm and the
 //! default w = 2 s, which was the most accurate of 0.3–4 s on the simulated missions, see
-//! tests/time_offset.rs `speed_variants`).
+//! tests/it/time_offset.rs `speed_variants`).
 //! A chord is only used when it spans at least half the window and contains no gap between
 //! consecutive samples longer than `max_gap_s` (Δt_max): no speed is ever made up across a GNSS
 //! outage or a recording gap. Like κ, speed is the same in every frame (it is a distance over a time).

@@ -6,7 +6,7 @@
 //! own), and on the shared legged mission with six spins this alone moved the signed-curvature
 //! offset by +0.43 s — read by `auto` as the lead of a lever arm that is not there. Leaving out the
 //! stands (± the time to travel one curvature chord) brought it back to +13 ms
-//! (`auto_table` in tests/time_offset_auto.rs prints both in the
+//! (`auto_table` in tests/it/time_offset_auto.rs prints both in the
 //! reason; `turns_in_place_do_not_fake_a_lever_arm` asserts that no lever arm is suspected).
 
 use nalgebra::Vector3;

@@ -26,7 +26,7 @@
 //!
 //! and the status is `ok` when confidence ≥ 0.5, ρ ≥ 0.3 and the peak is not at the edge of the
 //! search range; `weak` otherwise. The thresholds were set on the five simulated missions (see
-//! tests/time_offset.rs `offset_table`): with them no peak that is off by more than a second is `ok`
+//! tests/it/time_offset.rs `offset_table`): with them no peak that is off by more than a second is `ok`
 //! there. What they cannot see is a *biased* but clear peak: a sensor mounted a distance d ahead of
 //! the other sees the same curvature d/v earlier (κ_front(t) ≈ κ_back(t + d/v) at speed v), so the
 //! `curvature` offset is off by ≈ d/v with a perfect-looking peak (legged: 0.2 m at ~0.4 m/s gives

@@ -31,7 +31,7 @@ pub enum LeverCorrection {
     None,
     /// Beyond the paper: fit the scale s and the lateral lever arm d of L_est = s·(L_ref − d·Δψ) over
     /// all windows, and correct each window by d ([`super::lever_fit`]). The default: closest to the
-    /// truth on the shared missions (tests/lever_fit.rs `correction_table`).
+    /// truth on the shared missions (tests/it/lever_fit.rs `correction_table`).
     #[default]
     Fit,
 }

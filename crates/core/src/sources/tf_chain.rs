@@ -6,7 +6,7 @@
 //! ([`crate::sources::extract`]), so MCAP files, ROS 1 bags and rosbag2 folders all get chains; they are
 //! composed by [`crate::trajectory::tf_compose`].
 //!
-//! Choices (the issue left them open):
+//! Choices (where nothing dictated one):
 //! - Channels: those named `/tf` or `/tf_static` (with or without the leading `/`, as ROS 1 bags
 //!   sometimes write them) whose type is a TF batch ([`is_tf_message`]). Edges on `/tf_static` are
 //!   static (the latest one of a pair wins, as with latched `/tf_static` in ROS); a pair that ever

@@ -4,7 +4,7 @@
 //! A chain is a list of links, each a TF edge taken forward (parent → child) or inverted (walking up
 //! the tree). Dynamic edges (from `/tf`) are time series, interpolated between their two neighbouring
 //! samples (linear in position, slerp in rotation, the shorter way round); static edges (from
-//! `/tf_static`) are constant. Choices where ROS's `tf2` lookups would differ or the issue was silent:
+//! `/tf_static`) are constant. Choices where ROS's `tf2` lookups would differ or nothing dictated one:
 //!
 //! - The chain is sampled at the stamps of its fastest dynamic edge (the one with the most samples;
 //!   the first on the chain when two tie), so that edge is never interpolated and a one-edge chain
