@@ -37,6 +37,8 @@ pub fn run(cli: args::Cli) -> ExitCode {
         args::Command::Ape(a) => commands::ape::run(*a),
         args::Command::Rpe(a) => commands::rpe::run(*a),
         args::Command::Offset(a) => commands::offset::run(*a),
+        args::Command::Man(a) => commands::man::run(a),
+        args::Command::Completions(a) => commands::completions::run(a),
     };
     match result {
         Ok(code) => ExitCode::from(code),

@@ -17,6 +17,7 @@ mod extrinsics;
 mod fixtures;
 mod hostile;
 mod lever_fit;
+mod man;
 mod mcap_source;
 mod missions;
 mod parameters;

@@ -2,8 +2,10 @@
 
 pub mod ape;
 pub mod batch;
+pub mod completions;
 pub mod eval;
 pub mod export;
+pub mod man;
 pub mod merge;
 pub mod metric;
 pub mod offset;
