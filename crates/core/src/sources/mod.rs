@@ -48,7 +48,7 @@ pub struct ExtractOptions {
     /// `tf-static:` levers; answered in [`Extraction::static_transforms`] by the same pass.
     pub static_lookups: Vec<(String, String)>,
     /// Drop the orientations of these topics (positions only): 32 bytes a sample that nothing
-    /// downstream reads (see `crate::eval::inputs`).
+    /// downstream reads (see the application's `trajdrift::eval::inputs`).
     pub positions_only: Vec<String>,
 }
 
