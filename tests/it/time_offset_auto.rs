@@ -1,4 +1,4 @@
-//! Issue 3 (time offsets you can trust): `--offset-method auto` with automatic parameters on the shared
+//! Time offsets you can trust: `--offset-method auto` with automatic parameters on the shared
 //! missions through `eval::evaluate` with all defaults, the clock drift, and one test per failure
 //! mode of the curvature methods (noise vs ε, the Δx/v lead, unsigned κ's false confidence).
 

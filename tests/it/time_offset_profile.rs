@@ -1,4 +1,4 @@
-//! Issue 10 (clock offsets over time): the README fixture's bias, the offset profile and its σ, the
+//! Clock offsets over time: the README fixture's bias, the offset profile and its σ, the
 //! model chosen from it (constant / linear / piecewise), on simulated missions with a known clock.
 
 use crate::common;
