@@ -86,7 +86,7 @@ impl OffsetMethod {
 
 impl std::fmt::Display for OffsetMethod {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
+        f.pad(self.as_str())
     }
 }
 

@@ -38,7 +38,7 @@ pub enum LeverCorrection {
 
 impl std::fmt::Display for LeverCorrection {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
+        f.pad(self.as_str())
     }
 }
 
