@@ -14,6 +14,7 @@ pub use trajdrift_core::{Error, Result, Trajectory};
 pub mod annotate;
 pub mod batch;
 pub mod eval;
+pub mod evo;
 pub mod plot;
 pub mod render;
 pub mod standard;

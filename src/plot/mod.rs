@@ -4,6 +4,7 @@
 
 pub mod de_distribution;
 pub mod drift_error;
+pub mod evo;
 pub mod mission;
 pub mod offset_curves;
 pub mod offset_profile;

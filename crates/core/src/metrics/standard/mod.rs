@@ -272,23 +272,71 @@ fn check_rotations(
     Ok(needs_rot)
 }
 
+/// The poses a result was computed on (associated, aligned, projected) and RPE's pairs: what evo's
+/// result file (`--save_results`) and its figures are made of.
+#[derive(Debug, Clone)]
+pub struct Evaluated {
+    pub reference: Poses,
+    pub estimate: Poses,
+    /// RPE: the `(i, j)` pose pairs of the values, in their order (pairs skipped by
+    /// `point_distance_error_ratio` left out, as evo leaves them out).
+    pub pairs: Option<Vec<rpe::Pair>>,
+}
+
+/// [`evaluate`], also returning the poses and pairs the values come from.
+pub fn evaluate_detailed(
+    reference: Poses,
+    estimate: Poses,
+    metric: Metric,
+    relation: PoseRelation,
+    pipeline: &Pipeline,
+) -> Result<(MetricResult, Evaluated)> {
+    check_rotations(&reference, &estimate, metric, relation)?;
+    let (reference, estimate) = pair_up(reference, estimate, pipeline)?;
+    let (result, kept) =
+        evaluate_paired_kept(reference, estimate, metric, relation, pipeline, true)?;
+    Ok((result, kept.expect("kept on request")))
+}
+
 /// Alignment, errors and statistics of poses already paired.
 fn evaluate_paired(
+    reference: Poses,
+    estimate: Poses,
+    metric: Metric,
+    relation: PoseRelation,
+    pipeline: &Pipeline,
+) -> Result<MetricResult> {
+    evaluate_paired_kept(reference, estimate, metric, relation, pipeline, false).map(|r| r.0)
+}
+
+/// [`evaluate_paired`], keeping the poses and pairs when `keep`.
+fn evaluate_paired_kept(
     reference: Poses,
     mut estimate: Poses,
     metric: Metric,
     relation: PoseRelation,
     pipeline: &Pipeline,
-) -> Result<MetricResult> {
+    keep: bool,
+) -> Result<(MetricResult, Option<Evaluated>)> {
     let alignment = align(&reference, &mut estimate, pipeline)?;
     let (reference, estimate) = match pipeline.project_to_plane {
         Some(p) => (project(&reference, p), project(&estimate, p)),
         None => (reference, estimate),
     };
+    let mut kept_pairs = None;
     let (values, delta) = match metric {
         Metric::Ape => (ape::ape_errors(&reference, &estimate, relation)?, None),
         Metric::Rpe(sel) => {
-            let (v, _) = rpe::rpe_errors(&reference, &estimate, relation, &sel)?;
+            let (v, pairs) = rpe::rpe_errors(&reference, &estimate, relation, &sel)?;
+            if keep {
+                kept_pairs = Some(match relation {
+                    PoseRelation::PointDistanceErrorRatio => pairs
+                        .into_iter()
+                        .filter(|&(i, j)| reference.positions[i] != reference.positions[j])
+                        .collect(),
+                    _ => pairs,
+                });
+            }
             let d = DeltaReport {
                 delta: sel.delta,
                 unit: sel.unit.as_str().into(),
@@ -304,7 +352,7 @@ fn evaluate_paired(
                 .into(),
         )
     })?;
-    Ok(MetricResult {
+    let result = MetricResult {
         metric: match metric {
             Metric::Ape => "ape".into(),
             Metric::Rpe(_) => "rpe".into(),
@@ -317,7 +365,13 @@ fn evaluate_paired(
         time_offset_s: pipeline.t_offset_s,
         stats,
         values,
-    })
+    };
+    let kept = keep.then(|| Evaluated {
+        reference,
+        estimate,
+        pairs: kept_pairs,
+    });
+    Ok((result, kept))
 }
 
 /// The library entry for a time-offset sweep: `metric` of `estimate` with its stamps shifted by
