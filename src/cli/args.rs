@@ -54,6 +54,14 @@ pub enum Command {
     /// Every clock-offset method side by side (none, spatial, speed, curvature, signed curvature, auto).
     #[command(after_help = help::OFFSET)]
     Offset(Box<OffsetArgs>),
+    /// evo_res: the table, figures and files of result zips (evo's or trajdrift's), and statistics
+    /// over repeated runs and paired comparisons (`trajdrift res *.zip --use_filenames -p`).
+    #[command(after_help = help::RES)]
+    Res(Box<crate::cli::evo_args::ResArgs>),
+    /// evo_traj: information, checks, conversions, alignment and figures of trajectories
+    /// (`trajdrift traj tum a.txt b.txt --ref gt.txt -a -p --save_as_kitti`).
+    #[command(after_help = help::TRAJ)]
+    Traj(Box<crate::cli::evo_args::TrajArgs>),
     /// Write the manual (roff) to stdout, or one page per command into a folder.
     #[command(after_help = help::MAN)]
     Man(ManArgs),
@@ -142,6 +150,18 @@ Examples:
 Examples:
   trajdrift offset fixtures/sim_ground/mission.mcap --reference /reference/position --estimate /estimate/odom
   trajdrift offset tum groundtruth.tum estimate.tum";
+
+    pub const RES: &str = "\
+Examples:
+  trajdrift res results/*.zip --use_filenames --save_table table.csv -p --save_plot res.svg
+  trajdrift res orb_*.zip --runs                    # mean ± 95 % interval over repeated runs
+  trajdrift res orb_*.zip vins_*.zip --compare orb vins   # paired comparison on the same missions";
+
+    pub const TRAJ: &str = "\
+Examples:
+  trajdrift traj tum est.txt --ref gt.txt -a -p --save_plot traj.svg --plot_mode xy
+  trajdrift traj tum gt.txt est.txt --full_check      # evo_traj's checks, with counts
+  trajdrift traj mcap mission.mcap /odom --save_as_tum   # topics to TUM; --save_as_mcap for MCAP";
 
     pub const MAN: &str = "\
 Examples:
@@ -532,8 +552,13 @@ pub struct MetricArgs {
     #[arg(short = 's', long = "correct_scale", alias = "correct-scale")]
     pub correct_scale: bool,
     /// Align on the first N pairs only.
-    #[arg(long = "n_to_align", alias = "n-to-align", value_name = "N")]
-    pub n_to_align: Option<usize>,
+    #[arg(
+        long = "n_to_align",
+        alias = "n-to-align",
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
+    pub n_to_align: Option<i64>,
     /// Move the estimate's first pose onto the reference's.
     #[arg(long = "align_origin", alias = "align-origin", conflicts_with_all = ["align", "align_yaw"])]
     pub align_origin: bool,
@@ -585,6 +610,8 @@ pub struct MetricArgs {
 pub struct ApeArgs {
     #[command(flatten)]
     pub common: MetricArgs,
+    #[command(flatten)]
+    pub evo: crate::cli::evo_args::EvoMetricArgs,
 }
 
 #[derive(Debug, Args)]
@@ -592,6 +619,8 @@ pub struct ApeArgs {
 pub struct RpeArgs {
     #[command(flatten)]
     pub common: MetricArgs,
+    #[command(flatten)]
+    pub evo: crate::cli::evo_args::EvoMetricArgs,
     /// Delta between the poses of a pair.
     #[arg(short = 'd', long = "delta", default_value_t = 1.0)]
     pub delta: f64,

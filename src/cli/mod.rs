@@ -5,6 +5,9 @@ pub mod allocator;
 pub mod args;
 pub mod batch_progress;
 pub mod commands;
+pub mod evo_args;
+pub mod evo_config;
+pub mod evo_log;
 pub mod progress;
 
 use std::process::ExitCode;
@@ -20,7 +23,7 @@ pub const EXIT_WARNING: u8 = ExitStatus::Warning as u8;
 /// Parses the command line (clap exits with code 2 and its message on a usage error).
 pub fn parse() -> args::Cli {
     use clap::Parser;
-    args::Cli::parse()
+    args::Cli::parse_from(evo_config::expand(std::env::args_os().collect()))
 }
 
 /// Dispatches a parsed command line and maps the outcome to an exit code.
@@ -39,6 +42,8 @@ pub fn run(cli: args::Cli) -> ExitCode {
         args::Command::Offset(a) => commands::offset::run(*a),
         args::Command::Man(a) => commands::man::run(a),
         args::Command::Completions(a) => commands::completions::run(a),
+        args::Command::Res(a) => commands::res::run(*a),
+        args::Command::Traj(a) => commands::traj::run(*a),
     };
     match result {
         Ok(code) => ExitCode::from(code),

@@ -212,3 +212,142 @@ pub fn evo_result(
     }
     out
 }
+
+/// What the figures of `ape`/`rpe -p` show beyond the result.
+#[derive(Debug, Clone, Default)]
+pub struct FigureOptions {
+    pub mode: crate::plot::evo::PlotMode,
+    /// `index`, `seconds` or `distances`.
+    pub x_dimension: String,
+    pub colormap_min: Option<f64>,
+    pub colormap_max: Option<f64>,
+    pub colormap_max_percentile: Option<f64>,
+    /// The whole reference as read (`--plot_full_ref`), else the associated poses are drawn.
+    pub full_reference: Option<Vec<[f64; 3]>>,
+}
+
+/// evo's figures of one APE/RPE result: `raw` (the values against index, seconds or distance with
+/// rmse, median, mean and std), `map` (the reference and the estimate coloured by its value) and
+/// `stats` (the statistics as bars).
+pub fn figures(
+    r: &MetricResult,
+    title: &str,
+    axes: &ValueAxes,
+    est_name: &str,
+    o: &FigureOptions,
+) -> Vec<(String, crate::plot::evo::EvoFigure)> {
+    use crate::plot::evo::{Coloured, ErrorSeries, EvoFigure, StatsBars, TrajectoryMap};
+    let label = format!("{} ({})", r.metric.to_uppercase(), unit_words(&r.unit));
+    let one_line = title.replace('\n', " ");
+    let (x, x_label): (Vec<f64>, &str) = match (o.x_dimension.as_str(), &axes.seconds_from_start) {
+        ("distances", Some(_)) => (axes.distances_from_start.clone(), "d (m)"),
+        ("seconds", Some(s)) => (s.clone(), "t (s)"),
+        _ => ((0..r.values.len()).map(|i| i as f64).collect(), "index"),
+    };
+    let st = &r.stats;
+    let raw = ErrorSeries {
+        title: one_line.clone(),
+        x_label: x_label.into(),
+        y_label: label.clone(),
+        series: vec![(
+            label.clone(),
+            x.iter().copied().zip(r.values.iter().copied()).collect(),
+        )],
+        stats: vec![
+            ("rmse".into(), st.rmse),
+            ("median".into(), st.median),
+            ("mean".into(), st.mean),
+            ("std".into(), st.std),
+        ],
+        markers: false,
+    };
+    let mut cmax = o.colormap_max.unwrap_or(st.max);
+    if let Some(p) = o.colormap_max_percentile {
+        let mut s = r.values.clone();
+        s.sort_by(f64::total_cmp);
+        cmax = crate::plot::evo::quantile(&s, (p / 100.0).clamp(0.0, 1.0));
+    }
+    let cmin = o.colormap_min.unwrap_or(st.min);
+    let xyz = |p: &Poses| {
+        p.positions
+            .iter()
+            .map(|v| [v.x, v.y, v.z])
+            .collect::<Vec<_>>()
+    };
+    // RPE: the first pose carries no value (evo's `[0] + delta_ids`): colour it with the first value.
+    let est = xyz(&axes.estimate);
+    let skip = est.len().saturating_sub(r.values.len());
+    let mut values = vec![r.values.first().copied().unwrap_or(0.0); skip];
+    values.extend(r.values.iter().copied());
+    let map = TrajectoryMap {
+        title: one_line.clone(),
+        mode: o.mode,
+        reference: Some(
+            o.full_reference
+                .clone()
+                .unwrap_or_else(|| xyz(&axes.reference)),
+        ),
+        trajectories: Vec::new(),
+        coloured: Some(Coloured {
+            name: est_name.to_string(),
+            positions: est,
+            values,
+            cmin,
+            cmax,
+            value_label: label.clone(),
+        }),
+    };
+    let names = ["rmse", "median", "mean", "std", "min", "max"];
+    let stats = StatsBars {
+        title: one_line,
+        value_label: label,
+        stats: names.iter().map(|s| s.to_string()).collect(),
+        results: vec![(
+            est_name.to_string(),
+            vec![st.rmse, st.median, st.mean, st.std, st.min, st.max],
+        )],
+    };
+    vec![
+        ("raw".into(), EvoFigure::Errors(raw)),
+        ("map".into(), EvoFigure::Map(map)),
+        ("stats".into(), EvoFigure::Stats(stats)),
+    ]
+}
+
+/// `--change_unit`: the values and statistics in `to` (m, cm, mm, km from a length; deg, rad from an
+/// angle), as evo's `PE.change_unit`.
+pub fn change_unit(r: &mut MetricResult, to: &str) -> crate::error::Result<()> {
+    let metres = |u: &str| match u {
+        "mm" => Some(1e-3),
+        "cm" => Some(1e-2),
+        "m" => Some(1.0),
+        "km" => Some(1e3),
+        _ => None,
+    };
+    let factor = match (r.unit.as_str(), to) {
+        (a, b) if a == b => return Ok(()),
+        (a, b) if metres(a).is_some() && metres(b).is_some() => {
+            metres(a).unwrap_or(1.0) / metres(b).unwrap_or(1.0)
+        }
+        ("rad", "deg") => 180.0 / std::f64::consts::PI,
+        ("deg", "rad") => std::f64::consts::PI / 180.0,
+        (a, b) => {
+            return Err(crate::error::Error::InvalidArgument(format!(
+                "--change_unit {b}: cannot convert {} to {b}",
+                unit_words(a)
+            )))
+        }
+    };
+    if r.unit == "rad" && to == "deg" {
+        r.values.iter_mut().for_each(|v| *v = v.to_degrees());
+    } else if r.unit == "deg" && to == "rad" {
+        r.values.iter_mut().for_each(|v| *v = v.to_radians());
+    } else {
+        r.values.iter_mut().for_each(|v| *v *= factor);
+    }
+    if let Some(s) = crate::metrics::standard::ErrorStats::of(&r.values) {
+        r.stats = s;
+    }
+    r.unit = to.to_string();
+    Ok(())
+}

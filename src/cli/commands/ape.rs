@@ -8,5 +8,5 @@ use crate::cli::args::ApeArgs;
 
 /// Runs the command; returns the exit code.
 pub fn run(a: ApeArgs) -> Result<u8> {
-    super::metric::run(&a.common, Metric::Ape)
+    super::metric::run(&a.common, &a.evo, Metric::Ape)
 }

@@ -6,14 +6,21 @@ use anyhow::Result;
 use trajdrift::clock::ClockCorrection;
 use trajdrift::eval::config::{EvalConfig, NamedInput};
 use trajdrift::eval::preset::Preset;
+use trajdrift::evo::metric_result::{
+    change_unit, evo_result, evo_title, figures, FigureOptions, ValueAxes,
+};
+use trajdrift::metrics::standard::filters::{downsample_ids, motion_filter_ids};
 use trajdrift::metrics::standard::{
     Alignment, Metric, MetricResult, Pipeline, Plane, PoseRelation, SyncMethod,
 };
-use trajdrift::output::write_output;
+use trajdrift::output::{write_output, OutputGuard};
+use trajdrift::plot::evo::{PlotMode, PlotTarget};
 use trajdrift::report::json::TimeOffsetStatus;
 use trajdrift::standard::inputs::{EvoFormat, LoadedPair, MetricInputs};
 
 use crate::cli::args::{text_options, MetricArgs};
+use crate::cli::evo_args::{ignored_notes, EvoMetricArgs};
+use crate::cli::evo_log::EvoLog;
 use crate::cli::{EXIT_OK, EXIT_WARNING};
 
 /// The inputs named on the command line: evo's positional form, or the native one.
@@ -81,7 +88,8 @@ pub fn pipeline(a: &MetricArgs, t_offset_s: f64) -> Pipeline {
             (false, true, ..) => Alignment::ScaleOnly,
             _ => Alignment::None,
         },
-        n_to_align: a.n_to_align,
+        // evo's default -1 (and any negative) means all poses.
+        n_to_align: a.n_to_align.and_then(|n| usize::try_from(n).ok()),
         t_max_diff_s: a.t_max_diff,
         t_offset_s,
         sync: match a.sync_method.as_str() {
@@ -159,28 +167,127 @@ pub fn time_offset(a: &MetricArgs, inputs: &MetricInputs) -> Result<ResolvedOffs
     }
 }
 
-/// Runs `metric` for the command line `a` and prints it like evo (or as JSON).
-pub fn run(a: &MetricArgs, metric: Metric) -> Result<u8> {
+/// Runs `metric` for the command line `a` (and evo's output flags `evo`) and prints it like evo (or
+/// as JSON); writes evo's result file and figures when asked.
+pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
+    let log = EvoLog::new(&evo.usability, &(a, evo));
+    for note in ignored_notes(&[
+        (
+            "--rerun",
+            evo.rerun,
+            "there is no Rerun viewer; -p writes the figures as files",
+        ),
+        (
+            "--rerun_rec_id",
+            evo.rerun_rec_id.is_some(),
+            "there is no Rerun viewer",
+        ),
+        (
+            "--ros_map_yaml",
+            evo.ros_map_yaml.is_some(),
+            "ROS map images are not drawn",
+        ),
+        (
+            "--map_tile",
+            evo.map_tile.is_some(),
+            "map tiles are not drawn (no network)",
+        ),
+    ]) {
+        log.warn(&note);
+    }
     let relation = PoseRelation::parse(&a.pose_relation)?;
     let inputs = inputs(a)?;
+    let guard = OutputGuard::new(input_paths(a));
+    for (flag, out) in [
+        ("--json", a.json.as_deref()),
+        ("--save_results", evo.save_results.as_deref()),
+        ("--logfile", evo.usability.logfile.as_deref()),
+    ] {
+        if let Some(out) = out {
+            guard.check(flag, out)?;
+        }
+    }
     let resolved = time_offset(a, &inputs)?;
     let (offset, weak) = (resolved.constant_s, resolved.weak);
+    let pipeline = pipeline(a, offset);
+    let orientation =
+        trajdrift::metrics::standard::needs_orientation(metric, relation, pipeline.alignment)
+            || evo.motion_filter.is_some();
     let LoadedPair {
-        reference,
+        mut reference,
         mut estimate,
-        ..
-    } = {
-        let alignment = pipeline(a, offset).alignment;
-        let orientation =
-            trajdrift::metrics::standard::needs_orientation(metric, relation, alignment);
-        inputs.load_with(&|_| {}, orientation)?
-    };
+        reference_label,
+        estimate_label,
+    } = inputs.load_with(&|_| {}, orientation)?;
     if let Some(model) = &resolved.model {
         estimate = model.apply_to_poses(estimate);
     }
-    let pipeline = pipeline(a, offset);
-    let result =
-        trajdrift::metrics::standard::evaluate(reference, estimate, metric, relation, &pipeline)?;
+    log.detail(&format!(
+        "reference {reference_label}: {} poses; estimate {estimate_label}: {} poses",
+        reference.len(),
+        estimate.len()
+    ));
+    if let Some(n) = evo.downsample {
+        let (ir, ie) = (
+            downsample_ids(reference.len(), n),
+            downsample_ids(estimate.len(), n),
+        );
+        reference = reference.select(&ir);
+        estimate = estimate.select(&ie);
+        log.detail(&format!(
+            "downsampled to at most {n} poses: {} and {}",
+            reference.len(),
+            estimate.len()
+        ));
+    }
+    if let Some(m) = &evo.motion_filter {
+        if reference.stamps_s.is_none() || estimate.stamps_s.is_none() {
+            return Err(trajdrift::Error::InvalidArgument(
+                "--motion_filter: trajectories without stamps (KITTI) can't be motion filtered: it would break the pairing by index".into(),
+            )
+            .into());
+        }
+        let (ir, ie) = (
+            motion_filter_ids(&reference, m[0], m[1])?,
+            motion_filter_ids(&estimate, m[0], m[1])?,
+        );
+        reference = reference.select(&ir);
+        estimate = estimate.select(&ie);
+        log.detail(&format!(
+            "motion filter: {} and {} poses kept",
+            reference.len(),
+            estimate.len()
+        ));
+    }
+    let plots = evo.plot || evo.save_plot.is_some();
+    let full_reference = (plots && evo.plot_full_ref).then(|| {
+        reference
+            .positions
+            .iter()
+            .map(|p| [p.x, p.y, p.z])
+            .collect::<Vec<_>>()
+    });
+    let (mut result, evaluated) = if plots || evo.save_results.is_some() {
+        let (r, e) = trajdrift::metrics::standard::evaluate_detailed(
+            reference, estimate, metric, relation, &pipeline,
+        )?;
+        (r, Some(e))
+    } else {
+        (
+            trajdrift::metrics::standard::evaluate(
+                reference, estimate, metric, relation, &pipeline,
+            )?,
+            None,
+        )
+    };
+    if let Some(u) = &evo.change_unit {
+        change_unit(&mut result, u)?;
+    }
+    let al = &result.alignment;
+    log.detail(&format!(
+        "{} pairs; alignment {}: rotation {:?}, translation {:?} m, scale {}",
+        result.pairs, al.method, al.rotation, al.translation_m, al.scale
+    ));
     let to_stdout = a.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
     if let Some(path) = &a.json {
         let mut bytes = serde_json::to_vec_pretty(&result)?;
@@ -188,42 +295,135 @@ pub fn run(a: &MetricArgs, metric: Metric) -> Result<u8> {
         write_output(path, &bytes)?;
     }
     if !to_stdout {
-        print!("{}", render(&result, relation, &pipeline));
+        log.result(&render(&result, relation, &pipeline))?;
+    }
+    let (ref_name, est_name) = names(a, &reference_label, &estimate_label);
+    let mut code = if weak { EXIT_WARNING } else { EXIT_OK };
+    if let Some(e) = &evaluated {
+        let axes = ValueAxes::of(e);
+        if let Some(path) = &evo.save_results {
+            let zip =
+                evo_result(&result, relation, &pipeline, &axes, &ref_name, &est_name).to_zip()?;
+            replace_note(&log, evo, path);
+            guard.write("--save_results", path, &zip)?;
+            log.detail(&format!("results written to {}", path.display()));
+        }
+        if plots {
+            let options = FigureOptions {
+                mode: PlotMode::parse(&evo.plot_mode)?,
+                x_dimension: evo.plot_x_dimension.clone(),
+                colormap_min: evo.plot_colormap_min,
+                colormap_max: evo.plot_colormap_max,
+                colormap_max_percentile: evo.plot_colormap_max_percentile,
+                full_reference,
+            };
+            let title = evo_title(&result, relation, &pipeline);
+            let short = std::path::Path::new(&est_name)
+                .file_name()
+                .map_or(est_name.clone(), |n| n.to_string_lossy().into_owned());
+            let figures = figures(&result, &title, &axes, &short, &options);
+            let default_base = evo.save_results.as_ref().map_or_else(
+                || {
+                    std::path::PathBuf::from(format!(
+                        "{}_{}",
+                        result.metric,
+                        trajdrift::plot::file_stem(&short)
+                    ))
+                },
+                |r| r.with_extension(""),
+            );
+            if write_figures(
+                &log,
+                &guard,
+                evo.save_plot.as_deref(),
+                &default_base,
+                &figures,
+            )? {
+                code = code.max(EXIT_WARNING);
+            }
+        }
     }
     if weak {
-        eprintln!("warning [weak_time_offset]: the automatic time offset is not confident; none was applied");
+        log.warn("warning [weak_time_offset]: the automatic time offset is not confident; none was applied");
     }
-    Ok(if weak { EXIT_WARNING } else { EXIT_OK })
+    log.finish(&guard)?;
+    Ok(code)
 }
 
-/// evo's printout: the title, then the statistics sorted by name, six decimals.
-pub fn render(r: &MetricResult, relation: PoseRelation, p: &Pipeline) -> String {
-    let what = match relation {
-        PoseRelation::TransPart => "translation part",
-        PoseRelation::RotPart => "rotation part",
-        PoseRelation::Full => "full transformation",
-        PoseRelation::AngleDeg => "rotation angle in degrees",
-        PoseRelation::AngleRad => "rotation angle in radians",
-        PoseRelation::PointDistance => "point distance",
-        PoseRelation::PointDistanceErrorRatio => "point distance error ratio",
-    };
-    let unit = match r.unit.as_str() {
-        "" => "unit-less".to_string(),
-        u => u.to_string(),
-    };
-    let mut s = format!("{} w.r.t. {what} ({unit})\n", r.metric.to_uppercase());
-    if let Some(d) = &r.delta {
-        let mode = if d.all_pairs { "all" } else { "consecutive" };
-        s += &format!("for delta = {} ({}) using {mode} pairs\n", d.delta, d.unit);
+/// The files a metric reads: what an output must not overwrite.
+fn input_paths(a: &MetricArgs) -> Vec<std::path::PathBuf> {
+    a.inputs
+        .iter()
+        .map(std::path::PathBuf::from)
+        .chain(a.reference_file.iter().cloned())
+        .chain(a.estimate_file.iter().cloned())
+        .chain(a.text.kitti_times.iter().cloned())
+        .collect()
+}
+
+/// evo's `ref_name`/`est_name`: the files as given, the topics of the recording forms, else the
+/// loaded labels.
+fn names(a: &MetricArgs, reference: &str, estimate: &str) -> (String, String) {
+    match (
+        a.inputs.first().and_then(|w| EvoFormat::parse(w)),
+        a.inputs.len(),
+    ) {
+        (Some(EvoFormat::Bag | EvoFormat::Bag2 | EvoFormat::Mcap), 4) => {
+            (a.inputs[2].clone(), a.inputs[3].clone())
+        }
+        (Some(_), 3) => (a.inputs[1].clone(), a.inputs[2].clone()),
+        _ => (reference.to_string(), estimate.to_string()),
     }
-    s += match p.alignment {
-        Alignment::None => "(not aligned)",
-        Alignment::Se3 => "(with SE(3) Umeyama alignment)",
-        Alignment::Sim3 => "(with Sim(3) Umeyama alignment)",
-        Alignment::ScaleOnly => "(scale corrected)",
-        Alignment::Origin => "(with origin alignment)",
-        Alignment::YawTranslation => "(with 4-DoF yaw + translation alignment)",
+}
+
+/// Says that an existing output is replaced (evo asks; `--no_warnings` skips both).
+pub fn replace_note(log: &EvoLog, evo: &EvoMetricArgs, path: &std::path::Path) {
+    if !evo.usability.no_warnings && path.exists() {
+        log.warn(&format!("note: replacing {}", path.display()));
+    }
+}
+
+/// Writes evo's figures to `--save_plot FILE` (or beside `default_base`) and says where; true when
+/// a PDF was asked for and SVG written instead.
+pub fn write_figures(
+    log: &EvoLog,
+    guard: &OutputGuard,
+    save_plot: Option<&std::path::Path>,
+    default_base: &std::path::Path,
+    figures: &[(String, trajdrift::plot::evo::EvoFigure)],
+) -> Result<bool> {
+    let (target, substituted) = match save_plot {
+        Some(p) => match PlotTarget::of(p) {
+            Ok(t) => (t, false),
+            Err(svg) => {
+                log.warn(&format!(
+                    "warning [no_pdf_backend]: --save_plot {}: trajdrift draws SVG and PNG only (no PDF backend in plotters); writing SVG instead (convert with e.g. rsvg-convert -f pdf)",
+                    p.display()
+                ));
+                (svg, true)
+            }
+        },
+        None => (
+            PlotTarget {
+                base: default_base.to_path_buf(),
+                format: trajdrift::plot::PlotFormat::Svg,
+            },
+            false,
+        ),
     };
+    for (name, _) in figures {
+        guard.check("--save_plot", &target.path(name))?;
+    }
+    let written = target.write(figures)?;
+    let list: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+    log.note(&format!("figures written: {}", list.join(", ")));
+    Ok(substituted)
+}
+
+/// evo's printout: the title (evo's words, [`evo_title`]), then the statistics sorted by name, six
+/// decimals.
+pub fn render(r: &MetricResult, relation: PoseRelation, p: &Pipeline) -> String {
+    let mut s = evo_title(r, relation, p);
     if r.time_offset_s != 0.0 {
         s += &format!(" (estimate stamps shifted by {:+.6} s)", r.time_offset_s);
     }

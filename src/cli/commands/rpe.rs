@@ -16,5 +16,5 @@ pub fn run(a: RpeArgs) -> Result<u8> {
         all_pairs: a.all_pairs,
         from_reference: a.pairs_from_reference,
     };
-    super::metric::run(&a.common, Metric::Rpe(sel))
+    super::metric::run(&a.common, &a.evo, Metric::Rpe(sel))
 }

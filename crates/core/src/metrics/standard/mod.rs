@@ -6,6 +6,7 @@
 
 pub mod ape;
 pub mod associate;
+pub mod filters;
 pub mod in_eval;
 pub mod kitti_drift;
 pub mod poses;

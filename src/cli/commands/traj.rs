@@ -1,0 +1,344 @@
+//! `trajdrift traj`: evo_traj's information, checks, conversions, alignment and figures
+//! (`trajdrift::evo::traj`).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+
+use trajdrift::eval::config::{EvalConfig, NamedInput};
+use trajdrift::evo::traj::{
+    align_to, check, figures, full_check_text, info_table, load_text, load_topics, save, save_mcap,
+    shift, topic_name, AlignOptions, SaveAs, TrajInput,
+};
+use trajdrift::metrics::standard::filters::downsample_ids;
+use trajdrift::plot::evo::PlotMode;
+use trajdrift::report::output::OutputGuard;
+use trajdrift::sources::text::TextFormat;
+use trajdrift::trajectory::Trajectory;
+
+use crate::cli::evo_args::{ignored_notes, TrajArgs};
+use crate::cli::evo_log::EvoLog;
+use crate::cli::{EXIT_OK, EXIT_WARNING};
+
+/// The trajectories of the command line: (trajectories, reference).
+fn read(a: &TrajArgs) -> Result<(Vec<TrajInput>, Option<TrajInput>)> {
+    let form = a.inputs.first().map(String::as_str);
+    let text_form = match form {
+        Some("tum") => Some(Some(TextFormat::Tum)),
+        Some("kitti") => Some(Some(TextFormat::Kitti)),
+        Some("euroc") => Some(Some(TextFormat::Euroc)),
+        _ => None,
+    };
+    if let Some("bag" | "bag2" | "mcap") = form {
+        let [_, recording, topics @ ..] = a.inputs.as_slice() else {
+            return Err(trajdrift::Error::InvalidArgument(format!(
+                "{}: give the recording and one or more topics: {} RECORDING TOPIC...",
+                form.unwrap_or(""),
+                form.unwrap_or("")
+            ))
+            .into());
+        };
+        let mut all: Vec<String> = topics.to_vec();
+        if let Some(r) = &a.reference {
+            all.insert(0, r.clone());
+        }
+        let mut loaded = load_topics(Path::new(recording), &all)?;
+        let reference = a.reference.as_ref().map(|_| loaded.remove(0));
+        return Ok((loaded, reference));
+    }
+    let (files, format) = match text_form {
+        Some(f) => (&a.inputs[1..], f),
+        None => (&a.inputs[..], None),
+    };
+    if files.is_empty() {
+        return Err(trajdrift::Error::InvalidArgument(
+            "give one or more trajectory files (trajdrift traj [tum|kitti|euroc] FILE... or bag|bag2|mcap RECORDING TOPIC...)".into(),
+        )
+        .into());
+    }
+    let mut ts = files
+        .iter()
+        .map(|f| load_text(Path::new(f), format))
+        .collect::<trajdrift::Result<Vec<_>>>()?;
+    let mut reference = a
+        .reference
+        .as_ref()
+        .map(|r| load_text(Path::new(r), format))
+        .transpose()?;
+    if a.show_full_names {
+        for t in ts.iter_mut().chain(reference.iter_mut()) {
+            t.name = t.path.display().to_string();
+        }
+    }
+    Ok((ts, reference))
+}
+
+/// `--time-offset auto`: eval's offset search between the reference and `t`.
+fn auto_offset(
+    a: &TrajArgs,
+    reference: &TrajInput,
+    t: &TrajInput,
+    log: &EvoLog,
+) -> Result<(f64, bool)> {
+    let form = a.inputs.first().map(String::as_str);
+    let config = match form {
+        Some("bag" | "bag2" | "mcap") => EvalConfig::new(
+            Some(reference.path.clone()),
+            NamedInput::topic(&reference.name),
+            vec![NamedInput::topic(&t.name)],
+        ),
+        _ => EvalConfig::new(
+            None,
+            NamedInput::file(&reference.path.to_string_lossy()),
+            vec![NamedInput::file(&t.path.to_string_lossy())],
+        ),
+    };
+    let report = trajdrift::eval::evaluate(&config, &|_| {})?;
+    let o = &report.estimates[0].time_offset;
+    log.note(&format!(
+        "{}: time offset (auto) {:+.4} s found by {} ({}), {:+.4} s applied",
+        t.name, o.offset_s, o.method, o.status, o.applied_s
+    ));
+    Ok((o.applied_s, o.status != "ok" && o.status != "given"))
+}
+
+/// Runs the command; returns the exit code.
+pub fn run(a: TrajArgs) -> Result<u8> {
+    let log = EvoLog::new(&a.usability, &a);
+    for note in ignored_notes(&[
+        (
+            "--rerun",
+            a.rerun,
+            "there is no Rerun viewer; -p writes the figures as files",
+        ),
+        (
+            "--rerun_rec_id",
+            a.rerun_rec_id.is_some(),
+            "there is no Rerun viewer",
+        ),
+        (
+            "--ros_map_yaml",
+            a.ros_map_yaml.is_some(),
+            "ROS map images are not drawn",
+        ),
+        (
+            "--map_tile",
+            a.map_tile.is_some(),
+            "map tiles are not drawn (no network)",
+        ),
+        (
+            "--merge",
+            a.merge,
+            "trajectories are not merged; give one file per trajectory",
+        ),
+        (
+            "--motion_filter",
+            a.motion_filter.is_some(),
+            "the trajectories are kept whole",
+        ),
+        (
+            "--transform_left",
+            a.transform_left.is_some(),
+            "transforms from files are not applied",
+        ),
+        (
+            "--transform_right",
+            a.transform_right.is_some(),
+            "transforms from files are not applied",
+        ),
+        (
+            "--propagate_transform",
+            a.propagate_transform,
+            "transforms from files are not applied",
+        ),
+        (
+            "--invert_transform",
+            a.invert_transform,
+            "transforms from files are not applied",
+        ),
+        (
+            "--all_topics",
+            a.all_topics,
+            "name the topics; `trajdrift topics RECORDING` lists them",
+        ),
+    ]) {
+        log.warn(&note);
+    }
+    let mut inputs: Vec<PathBuf> = a.inputs.iter().map(PathBuf::from).collect();
+    inputs.extend(a.reference.iter().map(PathBuf::from));
+    let guard = OutputGuard::new(&inputs);
+    if let Some(l) = &a.usability.logfile {
+        guard.check("--logfile", l)?;
+    }
+    let (mut ts, reference) = read(&a)?;
+    let mut code = EXIT_OK;
+    if let Some(n) = a.downsample {
+        for t in ts.iter_mut() {
+            let ids = downsample_ids(t.trajectory.len(), n);
+            let tr = &t.trajectory;
+            t.trajectory = Trajectory {
+                stamps_ns: ids.iter().map(|&i| tr.stamps_ns[i as usize]).collect(),
+                positions: ids.iter().map(|&i| tr.positions[i as usize]).collect(),
+                orientations: tr
+                    .orientations
+                    .as_ref()
+                    .map(|o| ids.iter().map(|&i| o[i as usize]).collect()),
+            };
+        }
+    }
+    // Time offsets: --t_offset S for every trajectory, or each found against the reference.
+    for t in ts.iter_mut() {
+        let offset = match (a.t_offset, a.time_offset.as_deref(), &reference) {
+            (Some(s), _, _) => s,
+            (None, Some("auto"), Some(r)) => {
+                let (o, weak) = auto_offset(&a, r, t, &log)?;
+                if weak {
+                    log.warn(&format!("warning [weak_time_offset]: {}: the automatic time offset is not confident; none was applied", t.name));
+                    code = EXIT_WARNING;
+                }
+                o
+            }
+            (None, Some("auto"), None) => {
+                return Err(trajdrift::Error::InvalidArgument(
+                    "--time-offset auto needs a reference: --ref REF".into(),
+                )
+                .into())
+            }
+            (None, Some(s), _) => s.parse::<f64>().map_err(|_| {
+                trajdrift::Error::InvalidArgument(format!(
+                    "--time-offset {s}: expected seconds or `auto`"
+                ))
+            })?,
+            (None, None, _) => 0.0,
+        };
+        if offset != 0.0 {
+            shift(&mut t.trajectory, offset);
+            log.detail(&format!("{}: stamps shifted by {offset:+} s", t.name));
+        }
+    }
+    // Alignment onto the reference.
+    let wants_alignment = a.align || a.correct_scale || a.align_origin || a.sync;
+    let options = AlignOptions {
+        align: a.align,
+        correct_scale: a.correct_scale,
+        align_origin: a.align_origin,
+        n_to_align: a.n_to_align.and_then(|n| usize::try_from(n).ok()),
+        t_max_diff_s: a.t_max_diff,
+        sync: a.sync,
+        interpolate: a.sync_method == "interpolation",
+    };
+    if wants_alignment {
+        let Some(r) = &reference else {
+            return Err(trajdrift::Error::InvalidArgument(
+                "-a, -s, --align_origin and --sync need a reference: --ref REF".into(),
+            )
+            .into());
+        };
+        for t in ts.iter_mut() {
+            let (aligned, sim) = align_to(r, t, &options)?;
+            log.detail(&format!(
+                "{}: aligned onto {}: rotation {:?}, translation {:?}, scale {}",
+                t.name, r.name, sim.rotation, sim.translation, sim.scale
+            ));
+            t.trajectory = aligned;
+        }
+    }
+    if let Some(plane) = &a.project_to_plane {
+        let k = match plane.as_str() {
+            "xz" => 1,
+            "yz" => 0,
+            _ => 2,
+        };
+        for t in ts.iter_mut() {
+            for p in t.trajectory.positions.iter_mut() {
+                p[k] = 0.0;
+            }
+        }
+    }
+    // The information table and the checks.
+    let all: Vec<&TrajInput> = ts.iter().chain(reference.iter()).collect();
+    log.result(&info_table(&all))?;
+    if a.full_check || a.usability.verbose {
+        for t in &all {
+            log.result(&full_check_text(t))?;
+        }
+    }
+    if a.full_check && all.iter().any(|t| !check(t).valid()) {
+        log.warn("warning [check_failed]: a trajectory failed evo's checks (see `checks:` above)");
+        code = code.max(EXIT_WARNING);
+    }
+    if let Some(path) = &a.save_table {
+        let mut csv = String::from("name,poses,length_m,duration_s,rate_hz,dt_max_s,gaps,stamps_going_back,duplicate_stamps\n");
+        for t in &all {
+            let i = trajdrift::evo::traj::info(t);
+            let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+            csv += &format!(
+                "{},{},{},{},{},{},{},{},{}\n",
+                t.name,
+                i.poses,
+                i.length_m,
+                o(i.duration_s),
+                o(i.rate_hz),
+                o(i.dt_max_s),
+                i.gaps,
+                t.rows.stamp_going_back,
+                t.rows.duplicate_stamp
+            );
+        }
+        guard.write("--save_table", path, csv.as_bytes())?;
+    }
+    // Conversions: NAME.tum / NAME.kitti in the current folder, one MCAP for all.
+    let stem = |t: &TrajInput| trajdrift::plot::file_stem(&t.name.replace('/', "_"));
+    for (flag, on, ext, fmt) in [
+        ("--save_as_tum", a.save_as_tum, "tum", SaveAs::Tum),
+        ("--save_as_kitti", a.save_as_kitti, "kitti", SaveAs::Kitti),
+    ] {
+        if !on {
+            continue;
+        }
+        for t in &all {
+            let path = PathBuf::from(format!("{}.{ext}", stem(t)));
+            save(&guard, flag, &path, &t.trajectory, fmt)?;
+            log.note(&format!("{}: written to {}", t.name, path.display()));
+        }
+    }
+    let mcap_out = match (&a.save_as_mcap, a.save_as_bag || a.save_as_bag2) {
+        (Some(p), _) => Some(p.clone()),
+        (None, true) => {
+            log.warn("note: --save_as_bag/--save_as_bag2: trajdrift writes MCAP (ROS 2 PoseStamped), not a bag: trajectories.mcap");
+            Some(PathBuf::from("trajectories.mcap"))
+        }
+        _ => None,
+    };
+    if let Some(path) = mcap_out {
+        let list: Vec<(String, &Trajectory)> = all
+            .iter()
+            .map(|t| (topic_name(&t.name), &t.trajectory))
+            .collect();
+        save_mcap(&guard, "--save_as_mcap", &path, &list)?;
+        log.note(&format!(
+            "trajectories written to {} ({})",
+            path.display(),
+            list.iter()
+                .map(|l| l.0.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    if a.plot || a.save_plot.is_some() {
+        let list: Vec<(String, &Trajectory)> =
+            ts.iter().map(|t| (t.name.clone(), &t.trajectory)).collect();
+        let figs = figures(
+            &list,
+            reference.as_ref().map(|r| (r.name.as_str(), &r.trajectory)),
+            PlotMode::parse(&a.plot_mode)?,
+            a.plot_relative_time,
+        );
+        let base = PathBuf::from(format!("traj_{}", ts.first().map(stem).unwrap_or_default()));
+        if super::metric::write_figures(&log, &guard, a.save_plot.as_deref(), &base, &figs)? {
+            code = code.max(EXIT_WARNING);
+        }
+    }
+    log.finish(&guard)?;
+    Ok(code)
+}
