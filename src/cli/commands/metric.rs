@@ -242,7 +242,7 @@ pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
     }
     if let Some(m) = &evo.motion_filter {
         if reference.stamps_s.is_none() || estimate.stamps_s.is_none() {
-            return Err(trajdrift::Error::InvalidArgument(
+            return Err(trajdrift::Error::Metric(
                 "--motion_filter: trajectories without stamps (KITTI) can't be motion filtered: it would break the pairing by index".into(),
             )
             .into());

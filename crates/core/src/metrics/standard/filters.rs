@@ -34,7 +34,7 @@ pub fn motion_filter_ids(p: &Poses, distance_m: f64, angle_deg: f64) -> Result<V
         ));
     }
     if distance_m < 0.0 || angle_deg < 0.0 {
-        return Err(Error::InvalidArgument(format!(
+        return Err(Error::Metric(format!(
             "--motion_filter {distance_m} {angle_deg}: the thresholds must be >= 0"
         )));
     }
