@@ -677,7 +677,7 @@ pub fn figures(
             })
             .collect::<Vec<_>>()
     };
-    let mut xyz: Vec<(String, Vec<(f64, [f64; 3])>)> = Vec::new();
+    let mut xyz: Vec<crate::plot::evo::TimedTrajectory> = Vec::new();
     if let Some((n, r)) = reference {
         xyz.push((format!("{n} (reference)"), secs(r)));
     }

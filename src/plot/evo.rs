@@ -695,13 +695,16 @@ impl Distributions {
     }
 }
 
+/// A named trajectory as (time, position) samples.
+pub type TimedTrajectory = (String, Vec<(f64, [f64; 3])>);
+
 /// x, y and z over time, one panel each, one line per trajectory (evo_traj's "xyz" figure).
 #[derive(Debug, Clone, Default)]
 pub struct XyzOverTime {
     pub title: String,
     pub x_label: String,
     /// Per trajectory: its name and (time, position).
-    pub trajectories: Vec<(String, Vec<(f64, [f64; 3])>)>,
+    pub trajectories: Vec<TimedTrajectory>,
 }
 
 impl Draw for XyzOverTime {

@@ -39,18 +39,22 @@ pub fn motion_filter_ids(p: &Poses, distance_m: f64, angle_deg: f64) -> Result<V
         )));
     }
     let angle = angle_deg.to_radians();
-    let mut acc = vec![0.0; p.len()];
-    for i in 1..p.len() {
-        acc[i] = acc[i - 1] + (p.positions[i] - p.positions[i - 1]).norm();
+    let mut acc = Vec::with_capacity(p.len());
+    let mut sum = 0.0;
+    for (i, x) in p.positions.iter().enumerate() {
+        if i > 0 {
+            sum += (x - p.positions[i - 1]).norm();
+        }
+        acc.push(sum);
     }
     let (mut ids, mut prev_angle, mut prev_dist) = (vec![0u32], 0usize, 0.0);
-    for i in 1..p.len() {
-        let keep = acc[i] - prev_dist >= distance_m
+    for (i, &d) in acc.iter().enumerate().skip(1) {
+        let keep = d - prev_dist >= distance_m
             || rotation_angle(&(p.rotation(prev_angle).transpose() * p.rotation(i))) >= angle;
         if keep {
             ids.push(i as u32);
             prev_angle = i;
-            prev_dist = acc[i];
+            prev_dist = d;
         }
     }
     Ok(ids)

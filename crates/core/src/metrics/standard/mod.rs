@@ -367,7 +367,7 @@ fn evaluate_paired_kept(
         stats,
         values,
     };
-    let kept = keep.then(|| Evaluated {
+    let kept = keep.then_some(Evaluated {
         reference,
         estimate,
         pairs: kept_pairs,
