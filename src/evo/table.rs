@@ -172,13 +172,16 @@ mod tests {
                 ],
             ],
         );
-        let want = "              rmse      mean    median       std       min       max  \\\n\
-ape.zip   0.008119  0.007492  0.007415  0.003129   0.00035    0.0243   \n\
-kape.zip   1.30345  1.156997  1.065625  0.600282  0.069313  3.587949   \n\
-\n\
-                 sse  \n\
-ape.zip     0.143305  \n\
-kape.zip  7715.07344  ";
+        let want = [
+            "              rmse      mean    median       std       min       max  \\",
+            "ape.zip   0.008119  0.007492  0.007415  0.003129   0.00035    0.0243   ",
+            "kape.zip   1.30345  1.156997  1.065625  0.600282  0.069313  3.587949   ",
+            "",
+            "                 sse  ",
+            "ape.zip     0.143305  ",
+            "kape.zip  7715.07344  ",
+        ]
+        .join("\n");
         assert_eq!(t, want);
     }
 }
