@@ -6,7 +6,7 @@
 use std::cell::RefCell;
 use std::path::PathBuf;
 
-use trajdrift::report::output::OutputGuard;
+use trajdrift::output::OutputGuard;
 
 use crate::cli::evo_args::EvoUsability;
 

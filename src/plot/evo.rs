@@ -844,10 +844,9 @@ impl PlotTarget {
         for (name, f) in figures {
             let path = self.path(name);
             match self.format {
-                super::PlotFormat::Svg => crate::output::write_output(
-                    &path,
-                    super::style::render_svg(f)?.as_bytes(),
-                )?,
+                super::PlotFormat::Svg => {
+                    crate::output::write_output(&path, super::style::render_svg(f)?.as_bytes())?
+                }
                 super::PlotFormat::Png => super::style::render_png(f, &path)?,
             }
             out.push(path);

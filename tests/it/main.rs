@@ -11,6 +11,7 @@ mod cli;
 mod clock_consumers;
 mod conformance;
 mod drift_error;
+mod evo_cli;
 mod evo_reference;
 mod export;
 mod extrinsics;

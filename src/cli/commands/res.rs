@@ -7,7 +7,7 @@ use trajdrift::evo::res::{
     check_unique, compare_report, figures, load, merge, render, runs_report, table_file,
     title_conflicts, TableFormat,
 };
-use trajdrift::report::output::OutputGuard;
+use trajdrift::output::OutputGuard;
 
 use crate::cli::evo_args::{ignored_notes, ResArgs};
 use crate::cli::evo_log::EvoLog;

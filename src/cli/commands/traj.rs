@@ -11,8 +11,8 @@ use trajdrift::evo::traj::{
     shift, topic_name, AlignOptions, SaveAs, TrajInput,
 };
 use trajdrift::metrics::standard::filters::downsample_ids;
+use trajdrift::output::OutputGuard;
 use trajdrift::plot::evo::PlotMode;
-use trajdrift::report::output::OutputGuard;
 use trajdrift::sources::text::TextFormat;
 use trajdrift::trajectory::Trajectory;
 

@@ -9,8 +9,9 @@
 //! alignment `alignment_transformation_sim3` (4×4). JSON is written as Python's `json.dumps` writes it
 //! (`", "`/`": "` separators, ASCII with `\uXXXX` escapes, floats in Python's `repr`), so the members
 //! are byte for byte what evo writes for the same numbers. Reading keeps the members' key order (the
-//! order of evo_res's table) and accepts deflated members too; every member's size is checked against
-//! the archive before it is read.
+//! order of evo_res's table); members must be stored, as evo (Python's `zipfile` default) writes them
+//! (a compressed member is a one-line error naming it); every member's size is checked against the
+//! archive before it is read.
 
 use std::io::{Read, Write};
 use std::path::Path;
@@ -253,7 +254,7 @@ fn py_json_string(s: &str) -> String {
 /// decimal exponents from -4 to 15 (`0.0001`, `1e-05`, `1000000000000000.0`, `1e+16`).
 ///
 /// ```
-/// use trajdrift::report::evo_zip::py_float;
+/// use trajdrift_core::report::evo_zip::py_float;
 /// assert_eq!(py_float(1.0), "1.0");
 /// assert_eq!(py_float(0.00001), "1e-05");
 /// assert_eq!(py_float(0.0001), "0.0001");

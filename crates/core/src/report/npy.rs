@@ -10,7 +10,7 @@
 //! bytes present before anything is allocated.
 //!
 //! ```
-//! use trajdrift::report::npy::{read_npy, write_npy};
+//! use trajdrift_core::report::npy::{read_npy, write_npy};
 //! let bytes = write_npy(&[2, 2], &[1.0, 2.0, 3.0, 4.0]);
 //! assert_eq!(&bytes[..6], b"\x93NUMPY");
 //! assert_eq!(bytes.len() % 64, 32); // a 64-byte header, then 32 bytes of data

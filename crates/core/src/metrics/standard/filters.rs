@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 /// evo's `downsample`: `np.linspace(0, n − 1, num, dtype=int)`, nothing when `n ≤ num`.
 ///
 /// ```
-/// use trajdrift::metrics::standard::filters::downsample_ids;
+/// use trajdrift_core::metrics::standard::filters::downsample_ids;
 /// assert_eq!(downsample_ids(10, 4), vec![0, 3, 6, 9]);
 /// assert_eq!(downsample_ids(3, 5), vec![0, 1, 2]);
 /// ```

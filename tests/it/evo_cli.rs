@@ -6,7 +6,7 @@
 //! (evo_res reading trajdrift's zips and `trajdrift res` printing evo_res's table are checked against
 //! evo itself by `tests/python/check_evo_res.py` in `.ci/run`.)
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
