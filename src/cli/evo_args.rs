@@ -202,7 +202,7 @@ pub struct TrajArgs {
     /// Association: nearest_time or interpolation.
     #[arg(long = "sync_method", default_value = "nearest_time", value_parser = ["nearest_time", "interpolation"])]
     pub sync_method: String,
-    /// evo: merge the trajectories into one (named on stderr).
+    /// Merge the trajectories into one, sorted by stamp.
     #[arg(long = "merge")]
     pub merge: bool,
     /// Project to a plane (z, y or x set to 0) after alignment.
@@ -211,19 +211,19 @@ pub struct TrajArgs {
     /// Keep at most N evenly spaced poses of each trajectory.
     #[arg(long = "downsample", value_name = "N")]
     pub downsample: Option<usize>,
-    /// evo: filter poses by motion (named on stderr).
+    /// Keep a pose only after this much motion since the last kept one.
     #[arg(long = "motion_filter", num_args = 2, value_names = ["DISTANCE", "ANGLE_DEGREES"])]
     pub motion_filter: Option<Vec<f64>>,
-    /// evo: a transform applied on the left (named on stderr).
+    /// A Sim(3) from FILE (JSON x,y,z,qx,qy,qz,qw[,scale], .npy or text 4x4) applied on the left.
     #[arg(long = "transform_left", value_name = "FILE")]
     pub transform_left: Option<String>,
-    /// evo: a transform applied on the right (named on stderr).
+    /// The same applied on the right (in each pose's frame).
     #[arg(long = "transform_right", value_name = "FILE")]
     pub transform_right: Option<String>,
-    /// evo: with --transform_right (named on stderr).
+    /// With --transform_right: chain each relative motion times the transform from the first pose.
     #[arg(long = "propagate_transform")]
     pub propagate_transform: bool,
-    /// evo: invert the transform (named on stderr).
+    /// Apply the inverse of the transform.
     #[arg(long = "invert_transform")]
     pub invert_transform: bool,
     /// Write the figures (trajectories, xyz) beside the first input, or to --save_plot FILE.

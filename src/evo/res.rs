@@ -400,6 +400,35 @@ fn mission_of(r: &EvoResult) -> String {
         .to_string()
 }
 
+/// A short, still distinct name for each of `missions` (full reference names): the file name, or as
+/// many trailing path components as it takes (`lever_arm/reference.tum`).
+///
+/// ```
+/// use trajdrift::evo::res::short_names;
+/// let m = ["/d/a/reference.tum".to_string(), "/d/b/reference.tum".to_string()];
+/// assert_eq!(short_names(&m), ["a/reference.tum", "b/reference.tum"]);
+/// assert_eq!(short_names(&m[..1]), ["reference.tum"]);
+/// ```
+pub fn short_names(missions: &[String]) -> Vec<String> {
+    let tail = |m: &str, k: usize| {
+        let parts: Vec<&str> = m.split('/').filter(|p| !p.is_empty()).collect();
+        parts[parts.len().saturating_sub(k)..].join("/")
+    };
+    let mut distinct = missions.to_vec();
+    distinct.sort();
+    distinct.dedup();
+    for k in 1..=16 {
+        let names: Vec<String> = missions.iter().map(|m| tail(m, k)).collect();
+        let mut unique = names.clone();
+        unique.sort();
+        unique.dedup();
+        if unique.len() >= distinct.len() {
+            return names;
+        }
+    }
+    missions.to_vec()
+}
+
 /// `--runs`: per estimator (file name less its run number) and mission (reference), the mean ± 95 %
 /// interval of each statistic over the runs.
 pub fn runs_report(results: &[Loaded]) -> String {
@@ -422,12 +451,9 @@ pub fn runs_report(results: &[Loaded]) -> String {
         .chain(names.iter().cloned())
         .collect();
     let mut rows = vec![header];
-    for ((est, mission), rs) in &groups {
-        let mut row = vec![
-            est.clone(),
-            mission.rsplit('/').next().unwrap_or(mission).to_string(),
-            rs.len().to_string(),
-        ];
+    let shorts = short_names(&groups.iter().map(|g| g.0 .1.clone()).collect::<Vec<_>>());
+    for (((est, _), rs), mission) in groups.iter().zip(shorts) {
+        let mut row = vec![est.clone(), mission, rs.len().to_string()];
         for n in &names {
             let v: Vec<f64> = rs.iter().filter_map(|r| r.result.stat(n)).collect();
             row.push(match mean_interval(&v) {
@@ -505,13 +531,19 @@ pub fn compare_report(
         format!("{b} {stat}"),
         format!("({b} − {a})/{a}"),
     ]];
-    for (m, pair) in c.missions.iter().zip(
-        missions
-            .iter()
-            .filter(|m| !m.a.is_empty() && !m.b.is_empty()),
-    ) {
+    let shorts = short_names(&c.missions.iter().map(|m| m.0.clone()).collect::<Vec<_>>());
+    for ((m, pair), short) in c
+        .missions
+        .iter()
+        .zip(
+            missions
+                .iter()
+                .filter(|m| !m.a.is_empty() && !m.b.is_empty()),
+        )
+        .zip(shorts)
+    {
         rows.push(vec![
-            m.0.rsplit('/').next().unwrap_or(&m.0).to_string(),
+            short,
             pair.a.len().to_string(),
             format!("{:.6}", m.1),
             pair.b.len().to_string(),

@@ -708,3 +708,162 @@ pub fn figures(
         ),
     ]
 }
+
+/// Reads evo_traj's `--transform_left/--transform_right FILE`: a JSON object `{x, y, z, qx, qy, qz,
+/// qw[, scale]}`, a `.npy` 4×4 matrix, or a text file of a 4×4 matrix (`np.savetxt`); refused unless
+/// it is a Sim(3) (rotation times a positive scale, last row 0 0 0 1), as evo refuses it.
+pub fn load_transform(path: &Path) -> Result<Similarity> {
+    let bytes = std::fs::read(path).map_err(|cause| Error::Io {
+        path: path.to_path_buf(),
+        cause,
+    })?;
+    let bad = |why: String| {
+        Error::InvalidArgument(format!(
+            "{}: {why}; expected a JSON {{\"x\", \"y\", \"z\", \"qx\", \"qy\", \"qz\", \"qw\"[, \"scale\"]}}, a .npy or a text 4x4 Sim(3) matrix",
+            path.display()
+        ))
+    };
+    let text = String::from_utf8_lossy(&bytes);
+    if text.trim_start().starts_with('{') {
+        let v: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| bad(format!("not JSON ({e})")))?;
+        let f = |k: &str| v.get(k).and_then(|x| x.as_f64());
+        let (Some(x), Some(y), Some(z), Some(qx), Some(qy), Some(qz), Some(qw)) =
+            (f("x"), f("y"), f("z"), f("qx"), f("qy"), f("qz"), f("qw"))
+        else {
+            return Err(bad("a key is missing".into()));
+        };
+        let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(qw, qx, qy, qz));
+        return Ok(Similarity {
+            rotation: *q.to_rotation_matrix().matrix(),
+            translation: Vector3::new(x, y, z),
+            scale: f("scale").unwrap_or(1.0),
+        });
+    }
+    let m: Vec<f64> = if bytes.starts_with(b"\x93NUMPY") {
+        let a = crate::report::npy::read_npy(&bytes).map_err(bad)?;
+        if a.shape != [4, 4] {
+            return Err(bad(format!("shape {:?}", a.shape)));
+        }
+        a.data
+    } else {
+        text.split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|s| !s.is_empty())
+            .map(|s| {
+                s.parse::<f64>()
+                    .map_err(|_| bad(format!("{s:?} is not a number")))
+            })
+            .collect::<Result<Vec<_>>>()?
+    };
+    if m.len() != 16 {
+        return Err(bad(format!("{} numbers", m.len())));
+    }
+    let sr = nalgebra::Matrix3::from_fn(|i, j| m[4 * i + j]);
+    let det = sr.determinant();
+    if det <= 0.0 || m[12..] != [0.0, 0.0, 0.0, 1.0] {
+        return Err(bad("not a Sim(3) matrix".into()));
+    }
+    let scale = det.cbrt();
+    let rotation = sr / scale;
+    let g = rotation.transpose() * rotation;
+    if (g - nalgebra::Matrix3::identity()).abs().max() > 1e-6 {
+        return Err(bad("not a Sim(3) matrix (rotation not orthonormal)".into()));
+    }
+    Ok(Similarity {
+        rotation,
+        translation: Vector3::new(m[3], m[7], m[11]),
+        scale,
+    })
+}
+
+/// The inverse of a similarity (`--invert_transform`).
+pub fn invert(s: &Similarity) -> Similarity {
+    let rt = s.rotation.transpose();
+    Similarity {
+        rotation: rt,
+        translation: -(rt * s.translation) / s.scale,
+        scale: 1.0 / s.scale,
+    }
+}
+
+/// evo's `transform`: `T·P_i` (left), `P_i·T` (right), or with `propagate` each relative motion
+/// `P_i⁻¹·P_{i+1}·T` chained from the first pose. A scale on the right scales the pose's offset.
+pub fn transform(t: &mut Trajectory, s: &Similarity, right: bool, propagate: bool) {
+    let q_t = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&s.rotation));
+    let n = t.len();
+    let ident = vec![UnitQuaternion::identity(); n];
+    let q: Vec<UnitQuaternion<f64>> = t.orientations.clone().unwrap_or(ident);
+    let mut out_q = q.clone();
+    if !right {
+        for (p, o) in t.positions.iter_mut().zip(out_q.iter_mut()) {
+            *p = s.rotation * (*p * s.scale) + s.translation;
+            *o = q_t * *o;
+        }
+    } else if !propagate {
+        for (k, p) in t.positions.iter_mut().enumerate() {
+            *p += q[k] * s.translation;
+            out_q[k] = q[k] * q_t;
+        }
+    } else {
+        let p0 = t.positions.clone();
+        for k in 1..n {
+            // rel = P_{k-1}⁻¹ P_k T; new_k = new_{k-1} rel.
+            let (dq, dp) = (
+                q[k - 1].inverse() * q[k],
+                q[k - 1].inverse() * (p0[k] - p0[k - 1]),
+            );
+            let (rq, rp) = (dq * q_t, dp + dq * s.translation);
+            let (prev_q, prev_p) = (out_q[k - 1], t.positions[k - 1]);
+            out_q[k] = prev_q * rq;
+            t.positions[k] = prev_p + prev_q * rp;
+        }
+    }
+    if t.orientations.is_some() || right {
+        t.orientations = Some(out_q);
+    }
+}
+
+/// evo_traj's `--merge`: every trajectory's samples in one, sorted by stamp (a repeated stamp keeps
+/// its first sample, counted in the rows).
+pub fn merge(ts: Vec<TrajInput>) -> TrajInput {
+    let mut rows = RowAudit::default();
+    let with_q = ts.iter().all(|t| t.trajectory.orientations.is_some());
+    let mut m = Trajectory::new(with_q);
+    let path = ts.first().map(|t| t.path.clone()).unwrap_or_default();
+    for t in &ts {
+        rows.add(&t.rows);
+        for i in 0..t.trajectory.len() {
+            m.push(
+                t.trajectory.stamps_ns[i],
+                t.trajectory.positions[i],
+                t.trajectory.orientations.as_ref().map(|o| o[i]),
+            );
+        }
+    }
+    let audit = m.clean();
+    rows.duplicate_stamp += audit.duplicate_stamp;
+    TrajInput {
+        name: "merged_trajectory".into(),
+        path,
+        trajectory: m,
+        stamped: true,
+        rows,
+        checks: RawChecks::default(),
+    }
+}
+
+/// evo's `--motion_filter DISTANCE ANGLE_DEGREES` on one trajectory.
+pub fn motion_filter(t: &mut TrajInput, distance_m: f64, angle_deg: f64) -> Result<()> {
+    let ids =
+        crate::metrics::standard::filters::motion_filter_ids(&poses_of(t), distance_m, angle_deg)?;
+    let tr = &t.trajectory;
+    t.trajectory = Trajectory {
+        stamps_ns: ids.iter().map(|&i| tr.stamps_ns[i as usize]).collect(),
+        positions: ids.iter().map(|&i| tr.positions[i as usize]).collect(),
+        orientations: tr
+            .orientations
+            .as_ref()
+            .map(|o| ids.iter().map(|&i| o[i as usize]).collect()),
+    };
+    Ok(())
+}

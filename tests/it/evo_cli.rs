@@ -522,6 +522,10 @@ fn res_runs_give_intervals_and_the_comparison_needs_more_than_scatter() {
         out
     };
     let same = compare("A", "B");
+    assert!(
+        same.contains("lever_arm/reference.tum"),
+        "missions not told apart: {same}"
+    );
     assert!(same.contains("no difference"), "{same}");
     assert!(same.contains("paired over 5 missions"), "{same}");
     let worse = compare("A", "C");

@@ -7,7 +7,9 @@ write `--save_results` zips of the same command, into E/ and T/ under the same n
    a time and all together (`--use_filenames`);
 2. trajdrift res prints evo_res's text for evo's zips (one at a time, all together, `--merge`), and
    `--save_table` writes the same CSV;
-3. evo's loader (`file_interface.load_res_file`) finds the same members and array shapes in both.
+3. evo's loader (`file_interface.load_res_file`) finds the same members and array shapes in both;
+4. evo_traj and trajdrift traj write the same TUM file for --transform_left/right (with
+   --propagate_transform, --invert_transform), --motion_filter, --t_offset and -a/-s --sync onto --ref.
 
 Usage: check_evo_res.py --trajdrift BIN --evo-bin VENV/bin --data shared/evo-data --work DIR
 """
@@ -133,7 +135,42 @@ def main():
         if worst > 1e-9:
             sys.exit(f"FAIL: {name}: statistics differ by {worst} (relative)")
     print(f"ok: evo's load_res_file reads {len(names)} trajdrift zips with evo's info, members and shapes")
-    print(f"{3 * len(names) + 5} passed, 0 failed")
+
+    # evo_traj and trajdrift traj write the same TUM file for the same transformations.
+    import json
+
+    import numpy as np
+
+    tf = work / "t.json"
+    tf.write_text(json.dumps({"x": 0.5, "y": -1.0, "z": 0.2, "qx": 0.0, "qy": 0.0,
+                              "qz": 0.3826834, "qw": 0.9238795, "scale": 1.0}))
+    est, ref = str(data / "freiburg1_xyz-rgbdslam.txt"), str(data / "freiburg1_xyz-groundtruth.txt")
+    modes = [
+        ["--transform_left", str(tf)],
+        ["--transform_right", str(tf)],
+        ["--transform_right", str(tf), "--propagate_transform"],
+        ["--transform_left", str(tf), "--invert_transform"],
+        ["--motion_filter", "0.05", "5"],
+        ["--t_offset", "0.25"],
+        ["--ref", ref, "-a", "--sync"],
+        ["--ref", ref, "-as", "--sync", "--n_to_align", "100"],
+    ]
+    for k, mode in enumerate(modes):
+        e, t = work / f"traj{k}" / "E", work / f"traj{k}" / "T"
+        e.mkdir(parents=True)
+        t.mkdir(parents=True)
+        run([str(evo / "evo_traj"), "tum", est, *mode, "--save_as_tum", "--no_warnings"], e)
+        run([trajdrift, "traj", "tum", est, *mode, "--save_as_tum", "--silent"], t)
+        a = np.loadtxt(e / "freiburg1_xyz-rgbdslam.tum")
+        b = np.loadtxt(t / "freiburg1_xyz-rgbdslam.tum")
+        if a.shape != b.shape:
+            sys.exit(f"FAIL: evo_traj {' '.join(mode)}: {a.shape} poses, trajdrift {b.shape}")
+        dq = np.minimum(abs(a[:, 4:] - b[:, 4:]).max(axis=1), abs(a[:, 4:] + b[:, 4:]).max(axis=1))
+        worst = max(abs(a[:, :4] - b[:, :4]).max(), dq.max())
+        if worst > 1e-6:
+            sys.exit(f"FAIL: evo_traj {' '.join(mode)}: the TUM files differ by {worst}")
+        print(f"ok: evo_traj and trajdrift traj {' '.join(mode)} write the same TUM (within {worst:.1e})")
+    print(f"{3 * len(names) + 5 + len(modes)} passed, 0 failed")
 
 
 if __name__ == "__main__":

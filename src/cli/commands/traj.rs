@@ -7,8 +7,9 @@ use anyhow::Result;
 
 use trajdrift::eval::config::{EvalConfig, NamedInput};
 use trajdrift::evo::traj::{
-    align_to, check, figures, full_check_text, info_table, load_text, load_topics, save, save_mcap,
-    shift, topic_name, AlignOptions, SaveAs, TrajInput,
+    align_to, check, figures, full_check_text, info_table, invert, load_text, load_topics,
+    load_transform, merge, motion_filter, save, save_mcap, shift, topic_name, transform,
+    AlignOptions, SaveAs, TrajInput,
 };
 use trajdrift::metrics::standard::filters::downsample_ids;
 use trajdrift::output::OutputGuard;
@@ -127,36 +128,6 @@ pub fn run(a: TrajArgs) -> Result<u8> {
             "map tiles are not drawn (no network)",
         ),
         (
-            "--merge",
-            a.merge,
-            "trajectories are not merged; give one file per trajectory",
-        ),
-        (
-            "--motion_filter",
-            a.motion_filter.is_some(),
-            "the trajectories are kept whole",
-        ),
-        (
-            "--transform_left",
-            a.transform_left.is_some(),
-            "transforms from files are not applied",
-        ),
-        (
-            "--transform_right",
-            a.transform_right.is_some(),
-            "transforms from files are not applied",
-        ),
-        (
-            "--propagate_transform",
-            a.propagate_transform,
-            "transforms from files are not applied",
-        ),
-        (
-            "--invert_transform",
-            a.invert_transform,
-            "transforms from files are not applied",
-        ),
-        (
             "--all_topics",
             a.all_topics,
             "name the topics; `trajdrift topics RECORDING` lists them",
@@ -185,6 +156,25 @@ pub fn run(a: TrajArgs) -> Result<u8> {
                     .map(|o| ids.iter().map(|&i| o[i as usize]).collect()),
             };
         }
+    }
+    if let Some(m) = &a.motion_filter {
+        for t in ts.iter_mut() {
+            motion_filter(t, m[0], m[1])?;
+            log.detail(&format!(
+                "{}: motion filter kept {} poses",
+                t.name,
+                t.trajectory.len()
+            ));
+        }
+    }
+    if a.merge {
+        if ts.iter().any(|t| !t.stamped) {
+            return Err(trajdrift::Error::InvalidArgument(
+                "--merge: can't merge KITTI files (no stamps)".into(),
+            )
+            .into());
+        }
+        ts = vec![merge(ts)];
     }
     // Time offsets: --t_offset S for every trajectory, or each found against the reference.
     for t in ts.iter_mut() {
@@ -242,6 +232,24 @@ pub fn run(a: TrajArgs) -> Result<u8> {
             ));
             t.trajectory = aligned;
         }
+    }
+    if let Some((file, right)) = a
+        .transform_left
+        .as_ref()
+        .map(|f| (f, false))
+        .or(a.transform_right.as_ref().map(|f| (f, true)))
+    {
+        let mut t = load_transform(Path::new(file))?;
+        if a.invert_transform {
+            t = invert(&t);
+        }
+        for x in ts.iter_mut() {
+            transform(&mut x.trajectory, &t, right, a.propagate_transform);
+        }
+        log.detail(&format!(
+            "{} transformation from {file} applied",
+            if right { "right" } else { "left" }
+        ));
     }
     if let Some(plane) = &a.project_to_plane {
         let k = match plane.as_str() {
