@@ -56,6 +56,7 @@ pub fn run(a: ResArgs) -> Result<u8> {
     let mut code = EXIT_OK;
     if !a.ignore_title && !a.usability.no_warnings {
         for (file, title) in title_conflicts(&results) {
+            code = EXIT_WARNING;
             log.warn(&format!(
                 "warning [mismatching_titles]: {}: title {:?} differs from the first file's; only the first is printed (--ignore_title to just aggregate)",
                 file.display(),
