@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
+use trajdrift::clock::ClockCorrection;
 use trajdrift::eval::config::{EvalConfig, NamedInput};
 use trajdrift::evo::traj::{
     align_to, check, figures, full_check_text, info_table, invert, load_text, load_topics,
@@ -14,6 +15,7 @@ use trajdrift::evo::traj::{
 use trajdrift::metrics::standard::filters::downsample_ids;
 use trajdrift::output::OutputGuard;
 use trajdrift::plot::evo::PlotMode;
+use trajdrift::report::json::TimeOffsetStatus;
 use trajdrift::sources::text::TextFormat;
 use trajdrift::trajectory::Trajectory;
 
@@ -80,7 +82,7 @@ fn auto_offset(
     reference: &TrajInput,
     t: &TrajInput,
     log: &EvoLog,
-) -> Result<(f64, bool)> {
+) -> Result<(ClockCorrection, bool)> {
     let form = a.inputs.first().map(String::as_str);
     let config = match form {
         Some("bag" | "bag2" | "mcap") => EvalConfig::new(
@@ -96,11 +98,20 @@ fn auto_offset(
     };
     let report = trajdrift::eval::evaluate(&config, &|_| {})?;
     let o = &report.estimates[0].time_offset;
+    let correction = ClockCorrection::from_report(o);
     log.note(&format!(
-        "{}: time offset (auto) {:+.4} s found by {} ({}), {:+.4} s applied",
-        t.name, o.offset_s, o.method, o.status, o.applied_s
+        "{}: time offset (auto) {:+.4} s found by {} ({}), {}",
+        t.name,
+        o.offset_s,
+        o.method,
+        o.status,
+        match o.model.filter(|_| !correction.is_constant()) {
+            Some(m) => format!("clock model {} applied", m.as_str()),
+            None => format!("{:+.4} s applied", o.applied_s),
+        }
     ));
-    Ok((o.applied_s, o.status != "ok" && o.status != "given"))
+    let weak = !matches!(o.status, TimeOffsetStatus::Ok | TimeOffsetStatus::Given);
+    Ok((correction, weak))
 }
 
 /// Runs the command; returns the exit code.
@@ -181,12 +192,13 @@ pub fn run(a: TrajArgs) -> Result<u8> {
         let offset = match (a.t_offset, a.time_offset.as_deref(), &reference) {
             (Some(s), _, _) => s,
             (None, Some("auto"), Some(r)) => {
-                let (o, weak) = auto_offset(&a, r, t, &log)?;
+                let (correction, weak) = auto_offset(&a, r, t, &log)?;
                 if weak {
                     log.warn(&format!("warning [weak_time_offset]: {}: the automatic time offset is not confident; none was applied", t.name));
                     code = EXIT_WARNING;
                 }
-                o
+                t.trajectory = correction.apply(&t.trajectory);
+                0.0
             }
             (None, Some("auto"), None) => {
                 return Err(trajdrift::Error::InvalidArgument(
