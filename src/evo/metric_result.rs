@@ -265,7 +265,7 @@ pub fn figures(
     if let Some(p) = o.colormap_max_percentile {
         let mut s = r.values.clone();
         s.sort_by(f64::total_cmp);
-        cmax = crate::plot::evo::quantile(&s, (p / 100.0).clamp(0.0, 1.0));
+        cmax = crate::stats::quantile_sorted(&s, p / 100.0);
     }
     let cmin = o.colormap_min.unwrap_or(st.min);
     let xyz = |p: &Poses| {

@@ -14,6 +14,7 @@ use super::style::{
     xy_chart, Draw, FAMILY, MAX_POINTS,
 };
 use crate::error::{Error, Result};
+use crate::stats::quantile_sorted;
 
 /// evo's `--plot_mode`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -539,16 +540,6 @@ pub struct Distributions {
     pub violin: bool,
 }
 
-/// The `q` quantile of sorted values (linear interpolation, numpy's default).
-pub fn quantile(sorted: &[f64], q: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let pos = q * (sorted.len() - 1) as f64;
-    let (i, f) = (pos.floor() as usize, pos.fract());
-    sorted[i] + f * (sorted[(i + 1).min(sorted.len() - 1)] - sorted[i])
-}
-
 impl Draw for Distributions {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
         let n = self.results.len().max(1);
@@ -587,7 +578,11 @@ impl Draw for Distributions {
             s.sort_by(f64::total_cmp);
             let c = series_color(k, n.max(2));
             let x = k as f64;
-            let (q1, med, q3) = (quantile(&s, 0.25), quantile(&s, 0.5), quantile(&s, 0.75));
+            let (q1, med, q3) = (
+                quantile_sorted(&s, 0.25),
+                quantile_sorted(&s, 0.5),
+                quantile_sorted(&s, 0.75),
+            );
             if self.violin {
                 self.violin_shape(&mut chart, &s, x, c)?;
                 chart
