@@ -182,6 +182,108 @@ fn every_flag_of_evo_ape_and_rpe_parses_and_runs() {
 }
 
 #[test]
+fn every_flag_of_evo_res_and_evo_traj_parses() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_tum_pair(d);
+    std::fs::write(d.join("cfg.json"), "{}").unwrap();
+    std::fs::write(
+        d.join("t.json"),
+        r#"{"x": 1, "y": 0, "z": 0, "qx": 0, "qy": 0, "qz": 0, "qw": 1}"#,
+    )
+    .unwrap();
+    let o = run_in(
+        d,
+        &[
+            "ape",
+            "tum",
+            "ref.tum",
+            "est.tum",
+            "--save_results",
+            "a.zip",
+            "--silent",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0));
+    // The cases run one folder down, so that --save_as_tum writes beside, not over, the inputs.
+    let w = d.join("w");
+    std::fs::create_dir(&w).unwrap();
+    let mcap = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/sim_ground/mission.mcap");
+    let mcap = mcap.to_str().unwrap();
+    let (mut checked, mut failures) = (0, Vec::new());
+    for (k, (tool, form, option, n, example)) in evo_flags().iter().enumerate() {
+        let mut args: Vec<String> = match (tool.as_str(), form.as_str()) {
+            ("res", _) => vec!["res".into(), "../a.zip".into()],
+            ("traj", "bag" | "bag2" | "mcap") => {
+                vec![
+                    "traj".into(),
+                    form.clone(),
+                    mcap.into(),
+                    "/estimate/odom".into(),
+                ]
+            }
+            ("traj", _) => vec!["traj".into(), "tum".into(), "../est.tum".into()],
+            _ => continue,
+        };
+        args.push(option.clone());
+        let out = |ext: &str| d.join(format!("out{k}.{ext}")).display().to_string();
+        let value = match option.as_str() {
+            "--ref" if ["bag", "bag2", "mcap"].contains(&form.as_str()) => "/estimate/odom".into(),
+            "--ref" => "../ref.tum".into(),
+            "--transform_left" | "--transform_right" => "../t.json".into(),
+            "--save_plot" => out("svg"),
+            "--save_table" => out("csv"),
+            "--logfile" => out("log"),
+            "--config" => "../cfg.json".into(),
+            "--n_to_align" => "100".into(),
+            _ => example.clone(),
+        };
+        for _ in 0..*n {
+            args.push(value.clone());
+        }
+        // Alignment and sync need the reference, as in evo.
+        if [
+            "-a",
+            "--align",
+            "-s",
+            "--correct_scale",
+            "--align_origin",
+            "--sync",
+            "--n_to_align",
+        ]
+        .contains(&option.as_str())
+        {
+            args.push("--ref".into());
+            args.push(if args[1] == "tum" {
+                "../ref.tum".into()
+            } else {
+                "/estimate/odom".into()
+            });
+        }
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = run_in(&w, &refs);
+        let (_, err) = text(&o);
+        checked += 1;
+        if !matches!(o.status.code(), Some(0 | 3)) || err.contains("unexpected argument") {
+            failures.push(format!(
+                "{}: exit {:?}: {}",
+                args.join(" "),
+                o.status.code(),
+                err.trim()
+            ));
+        }
+    }
+    println!("{checked} evo_res/evo_traj flag × form cases run");
+    assert!(checked >= 200, "only {checked} cases");
+    assert!(
+        failures.is_empty(),
+        "{} failures:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
 fn flags_without_meaning_are_named_once_and_config_json_wins() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
