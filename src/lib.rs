@@ -11,8 +11,11 @@ pub use trajdrift_core::{
 };
 pub use trajdrift_core::{Error, Result, Trajectory};
 
+extern crate self as trajdrift;
+
 pub mod annotate;
 pub mod batch;
+pub mod cli;
 pub mod eval;
 pub mod evo;
 pub mod plot;

@@ -1,7 +1,6 @@
-//! The `trajdrift` binary: parse arguments, dispatch, print. All logic lives in the library.
-
-mod cli;
+//! The `trajdrift` binary: the command line of the library's [`trajdrift::cli`], nothing else.
 
 fn main() -> std::process::ExitCode {
-    cli::run(cli::parse())
+    trajdrift::cli::allocator::return_large_blocks();
+    std::process::ExitCode::from(trajdrift::cli::main_with_args(std::env::args_os().collect()))
 }

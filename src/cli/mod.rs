@@ -10,8 +10,6 @@ pub mod evo_config;
 pub mod evo_log;
 pub mod progress;
 
-use std::process::ExitCode;
-
 use trajdrift::error::ExitStatus;
 use trajdrift::report::escape::escape_line;
 
@@ -20,15 +18,22 @@ pub const EXIT_OK: u8 = ExitStatus::Ok as u8;
 /// The command finished, but with a warning the user must see (weak offset, truncated recording).
 pub const EXIT_WARNING: u8 = ExitStatus::Warning as u8;
 
-/// Parses the command line (clap exits with code 2 and its message on a usage error).
-pub fn parse() -> args::Cli {
+/// Runs the command line `args` (the program name first) and returns its exit code: what the
+/// `trajdrift` binary does, callable in process (the Python package's `trajdrift` command). A usage
+/// error prints clap's message and returns 2; `--help` and `--version` print and return 0.
+pub fn main_with_args(args: Vec<std::ffi::OsString>) -> u8 {
     use clap::Parser;
-    args::Cli::parse_from(evo_config::expand(std::env::args_os().collect()))
+    match args::Cli::try_parse_from(evo_config::expand(args)) {
+        Ok(cli) => run(cli),
+        Err(e) => {
+            let _ = e.print();
+            e.exit_code().clamp(0, 255) as u8
+        }
+    }
 }
 
 /// Dispatches a parsed command line and maps the outcome to an exit code.
-pub fn run(cli: args::Cli) -> ExitCode {
-    allocator::return_large_blocks();
+pub fn run(cli: args::Cli) -> u8 {
     let result = match cli.command {
         args::Command::Eval(a) => commands::eval::run(*a),
         args::Command::Topics(a) => commands::topics::run(a),
@@ -46,11 +51,11 @@ pub fn run(cli: args::Cli) -> ExitCode {
         args::Command::Traj(a) => commands::traj::run(*a),
     };
     match result {
-        Ok(code) => ExitCode::from(code),
-        Err(e) if is_broken_pipe(&e) => ExitCode::from(EXIT_OK),
+        Ok(code) => code,
+        Err(e) if is_broken_pipe(&e) => EXIT_OK,
         Err(e) => {
             eprintln!("error: {}", message(&e));
-            ExitCode::from(exit_status(&e).code())
+            exit_status(&e).code()
         }
     }
 }
