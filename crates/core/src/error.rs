@@ -109,6 +109,22 @@ pub enum Error {
         how: String,
     },
 
+    /// Two outputs of one command (or one run) would be the same file.
+    #[error("{flag} {out}: {other} writes the same file; give each output its own path")]
+    OutputClash {
+        flag: String,
+        out: PathBuf,
+        other: String,
+    },
+
+    /// An output folder is being written by another trajdrift run.
+    #[error("{path}: another trajdrift {what} is writing into this folder ({holder}); wait for it to finish, or choose another --out")]
+    OutputBusy {
+        path: PathBuf,
+        what: String,
+        holder: String,
+    },
+
     /// Standard output could not be written.
     #[error("<stdout>: cannot write: {}", crate::error::io_cause(.cause))]
     Stdout { cause: std::io::Error },
@@ -168,11 +184,22 @@ impl Error {
         }
     }
 
+    /// Builds an [`Error::Output`] for `path` from an I/O error: its cause, and what to do about it.
+    pub fn output(path: impl Into<PathBuf>, cause: &std::io::Error) -> Self {
+        Error::Output {
+            path: path.into(),
+            detail: format!("{}; {}", io_cause(cause), io_hint(cause)),
+        }
+    }
+
     /// The exit status this error ends the process with: usage errors (a flag's value, an output
     /// that would overwrite an input) are [`ExitStatus::Usage`], everything else a failure.
     pub fn exit_status(&self) -> ExitStatus {
         match self {
-            Error::InvalidArgument(_) | Error::OutputIsInput { .. } => ExitStatus::Usage,
+            Error::InvalidArgument(_)
+            | Error::OutputIsInput { .. }
+            | Error::OutputClash { .. }
+            | Error::OutputBusy { .. } => ExitStatus::Usage,
             _ => ExitStatus::Failure,
         }
     }
@@ -235,16 +262,48 @@ pub fn io_cause(e: &std::io::Error) -> String {
     }
 }
 
-/// What to do about an I/O error, by its kind.
+/// What to do about an I/O error, by its cause: the common ones each get their own advice.
 pub fn io_hint(e: &std::io::Error) -> &'static str {
     use std::io::ErrorKind as K;
+    #[cfg(unix)]
+    match e.raw_os_error() {
+        Some(libc::ENAMETOOLONG) => {
+            return "the name is longer than the file system allows (255 bytes a name on most): choose a shorter file or folder name"
+        }
+        Some(libc::EROFS) => {
+            return "the file system is read-only (a mounted image, a read-only share): write to another folder"
+        }
+        Some(libc::EBUSY) => {
+            return "the file is busy (in use by another program, or a mount point): close what holds it or choose another name"
+        }
+        Some(libc::ETXTBSY) => {
+            return "the file is a program being run: choose another name"
+        }
+        Some(libc::ENOTDIR) => {
+            return "a part of the path is a file, not a folder: check the path"
+        }
+        Some(libc::ENOSPC) => {
+            return "the disk is full: free some space, or write to another disk"
+        }
+        Some(libc::EDQUOT) => {
+            return "your disk quota is used up: free some space, or write to another disk"
+        }
+        Some(libc::EMFILE | libc::ENFILE) => {
+            return "too many open files: raise the limit (`ulimit -n`) or run fewer jobs at once"
+        }
+        Some(libc::ELOOP) => return "too many levels of symlinks (a loop?): check the links",
+        Some(libc::EXDEV) => return "the rename crosses file systems: write to a folder on one file system",
+        Some(libc::EFBIG) => return "the file is larger than the file system allows: write to another file system",
+        _ => {}
+    }
     match e.kind() {
         K::NotFound => "check the path (run `ls` on it)",
-        K::PermissionDenied => "check the file's permissions",
+        K::PermissionDenied => "check the permissions of the file and of its folder",
         K::IsADirectory => "pass a file, not a folder",
         K::UnexpectedEof => "the file ends early: it may be truncated or still being written",
         K::StorageFull => "free some disk space",
         K::InvalidData => "its content is not what was expected (not UTF-8 text?): check that it is the file you meant",
+        K::AlreadyExists => "a file of that name appeared meanwhile: try again",
         _ => "check that the file is readable and the disk is healthy",
     }
 }
