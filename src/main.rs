@@ -2,5 +2,7 @@
 
 fn main() -> std::process::ExitCode {
     trajdrift::cli::allocator::return_large_blocks();
-    std::process::ExitCode::from(trajdrift::cli::main_with_args(std::env::args_os().collect()))
+    std::process::ExitCode::from(trajdrift::cli::main_with_args(
+        std::env::args_os().collect(),
+    ))
 }

@@ -21,7 +21,7 @@ use crate::decode::message_kind;
 use crate::error::{Error, Result};
 use crate::eval::config::{EvalConfig, TrajectoryInput};
 use crate::eval::inputs::Inputs;
-use crate::output::{AtomicFile, OutputGuard};
+use crate::output::{OutputFile, OutputGuard};
 use crate::report::json::{EstimateReport, Report};
 use crate::sources::Progress;
 use crate::trajectory::Trajectory;
@@ -68,12 +68,44 @@ pub fn check_annotate(config: &EvalConfig, out: &Path, force: bool) -> Result<()
             )));
         }
     }
+    let ours = channel_topics(config)?;
     if recordings.is_empty() {
         check_output(Path::new(""), out, force)?;
     } else {
-        crate::sources::open_all(&recordings)?;
+        let source = crate::sources::open_all(&recordings)?;
+        if let Some(t) = source
+            .topics()?
+            .into_iter()
+            .find(|t| ours.contains(&t.topic))
+        {
+            return Err(Error::InvalidArgument(format!(
+                "--annotate: the recording already holds the channel {} (an annotated copy?); annotate the original recording",
+                crate::report::escape::escape(&t.topic)
+            )));
+        }
     }
     Ok(())
+}
+
+/// The channels the annotated copy adds (`/trajdrift/reference/curvature`, and per estimate
+/// `/trajdrift/<name>/aligned`, `drift_error`, `curvature`), refused when two coincide: an estimate
+/// named `reference` would double the reference's curvature channel.
+pub fn channel_topics(config: &EvalConfig) -> Result<Vec<String>> {
+    let mut topics = vec![channels::topic("reference", "curvature")];
+    for e in &config.estimates {
+        for what in ["aligned", "drift_error", "curvature"] {
+            let t = channels::topic(&e.name, what);
+            if topics.contains(&t) {
+                return Err(Error::InvalidArgument(format!(
+                    "--annotate: estimate `{}` would write the channel {t}, which another channel of the annotated recording takes; name it with --estimate NAME=TOPIC",
+                    crate::report::escape::escape(&e.name),
+                    t = crate::report::escape::escape(&t)
+                )));
+            }
+            topics.push(t);
+        }
+    }
+    Ok(topics)
 }
 
 /// The text files among the inputs (never to be overwritten either).
@@ -174,19 +206,17 @@ pub fn annotate(
     })
 }
 
-/// Writes `out` through `write` with the one atomic writer ([`AtomicFile`]: a temporary file beside
-/// it, synced and renamed when complete, removed on failure).
+/// Writes `out` through `write` with the one file writer ([`OutputFile`]: a regular file through a
+/// temporary file beside it, synced and renamed when complete, removed on failure; a device written
+/// through).
 fn write_atomically(
     out: &Path,
     write: impl FnOnce(
         std::io::BufWriter<std::fs::File>,
     ) -> Result<(CopyOutcome, std::io::BufWriter<std::fs::File>)>,
 ) -> Result<CopyOutcome> {
-    let out_err = |e: std::io::Error| Error::Output {
-        path: out.to_path_buf(),
-        detail: e.to_string(),
-    };
-    let mut target = AtomicFile::create(out)?;
+    let out_err = |e: std::io::Error| Error::output(out, &e);
+    let mut target = OutputFile::create(out)?;
     let file = target.file().try_clone().map_err(out_err)?;
     let (outcome, mut sink) = write(std::io::BufWriter::new(file))?;
     sink.flush().map_err(out_err)?;

@@ -8,7 +8,8 @@ use std::path::Path;
 use super::summary::Summary;
 use crate::plot::de_distribution::DeDistribution;
 use crate::plot::style::render_svg;
-use crate::render::html::{escape, page};
+use crate::render::html::page;
+use crate::report::escape::html as escape;
 
 /// The page for `summary`, whose per-mission files are in `dir`.
 pub fn render(summary: &Summary, dir: &Path) -> String {

@@ -329,15 +329,27 @@ impl EvalConfig {
     }
 
     /// Refuses the outputs the library writes itself (`--export-aligned`, one file per estimate) when
-    /// one would overwrite an input.
+    /// one would overwrite an input or another of them.
     pub fn check_outputs(&self) -> Result<()> {
+        self.claim_outputs(&mut self.output_guard())
+    }
+
+    /// Claims the outputs the library writes itself (`--export-aligned`, one file per estimate, whose
+    /// names must map to distinct file names) in `guard`, beside the command's own.
+    pub fn claim_outputs(&self, guard: &mut crate::output::OutputGuard) -> Result<()> {
         let Some(file) = &self.export_aligned else {
             return Ok(());
         };
-        let guard = self.output_guard();
+        if self.estimates.len() > 1 {
+            crate::output::names::file_stems(
+                "estimates",
+                self.estimates.iter().map(|e| e.name.as_str()),
+                "name them with --estimate NAME=TOPIC",
+            )?;
+        }
         for e in &self.estimates {
             let path = super::export::aligned_path(file, &e.name, self.estimates.len());
-            guard.check("--export-aligned", &path)?;
+            guard.claim("--export-aligned", &path)?;
         }
         Ok(())
     }

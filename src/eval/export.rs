@@ -4,8 +4,9 @@
 //! alignment.
 //!
 //! With one estimate the file is written as given. With several, the estimate's name is inserted before
-//! the extension: `aligned.tum` → `aligned.lio.tum`, `aligned.odom.tum` (characters other than
-//! letters, digits, `-` and `_` in the name become `_`, so `estimate/odom` gives `aligned.estimate_odom.tum`).
+//! the extension: `aligned.tum` → `aligned.lio.tum`, `aligned.odom.tum`, the name mapped to a file name
+//! by the one mapping ([`crate::output::names::file_stem`]: `estimate/odom` gives
+//! `aligned.estimate_odom.tum`; two names mapping to one file are refused before the evaluation).
 //! Written via a temporary file and a rename ([`crate::output::write_output`]).
 
 use std::path::{Path, PathBuf};
@@ -29,16 +30,7 @@ pub fn aligned_path(file: &Path, name: &str, n_estimates: usize) -> PathBuf {
     if n_estimates <= 1 {
         return file.to_path_buf();
     }
-    let safe: String = name
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
+    let safe = crate::output::names::file_stem(name);
     let stem = file
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())

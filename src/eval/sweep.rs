@@ -13,6 +13,7 @@ use crate::error::{Error, Result};
 use crate::eval::config::EvalConfig;
 use crate::eval::evaluate_loaded;
 use crate::eval::inputs::load;
+use crate::report::escape::csv_field;
 use crate::report::json::{DriftErrorReport, EstimateReport};
 use crate::sources::Progress;
 
@@ -268,50 +269,32 @@ pub fn run_sweep(
 }
 
 impl Sweep {
-    /// `sweep.csv`: one row per value × estimate × window size; empty cells where undefined.
+    /// `sweep.csv`: one row per value × estimate × window size; empty cells where undefined. Text
+    /// cells (names, statuses, errors) through the CSV sink ([`csv_field`]: no formula, one line).
     pub fn to_csv(&self) -> Result<String> {
-        let mut w = csv::Writer::from_writer(Vec::new());
-        let io = |e: csv::Error| Error::InvalidArgument(format!("writing sweep.csv: {e}"));
-        w.write_record([
-            "param",
-            "value",
-            "estimate",
-            "window_m",
-            "windows",
-            "de_median",
-            "de_rmse",
-            "discarded_fraction",
-            "applied_offset_s",
-            "offset_status",
-            "ape_rmse",
-            "rpe_point_distance_1m_rmse",
-            "error",
-        ])
-        .map_err(io)?;
+        let mut s = String::from("param,value,estimate,window_m,windows,de_median,de_rmse,discarded_fraction,applied_offset_s,offset_status,ape_rmse,rpe_point_distance_1m_rmse,error\n");
         let opt = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
         for r in &self.rows {
             let m = r.metrics.as_ref();
-            w.write_record([
+            let cells = [
                 self.param.as_str().to_string(),
                 r.value.to_string(),
-                r.estimate.clone(),
+                csv_field(&r.estimate),
                 opt(m.map(|m| m.window_m)),
                 m.map_or(String::new(), |m| m.windows.to_string()),
                 opt(m.and_then(|m| m.de_median)),
                 opt(m.and_then(|m| m.de_rmse)),
                 opt(m.map(|m| m.discarded_fraction)),
                 opt(m.map(|m| m.applied_offset_s)),
-                m.map_or(String::new(), |m| m.offset_status.to_string()),
+                m.map_or(String::new(), |m| csv_field(&m.offset_status.to_string())),
                 opt(m.and_then(|m| m.ape_rmse)),
                 opt(m.and_then(|m| m.rpe_point_distance_1m_rmse)),
-                r.error.clone().unwrap_or_default(),
-            ])
-            .map_err(io)?;
+                r.error.as_deref().map_or(String::new(), csv_field),
+            ];
+            s.push_str(&cells.join(","));
+            s.push('\n');
         }
-        let bytes = w
-            .into_inner()
-            .map_err(|e| Error::InvalidArgument(format!("writing sweep.csv: {e}")))?;
-        String::from_utf8(bytes).map_err(|e| Error::InvalidArgument(e.to_string()))
+        Ok(s)
     }
 }
 

@@ -19,7 +19,7 @@ use crate::eval::config::{EvalConfig, NamedInput};
 use crate::metrics::standard::associate::associate;
 use crate::metrics::standard::umeyama::{self, Similarity};
 use crate::metrics::standard::{Poses, StampSeconds, SyncMethod};
-use crate::output::{AtomicFile, OutputGuard};
+use crate::output::{OutputFile, OutputGuard};
 use crate::plot::evo::{EvoFigure, PlotMode, TrajectoryMap, XyzOverTime};
 use crate::sources::text::{read_text_audited, TextFormat, TextOptions};
 use crate::trajectory::rows::RowAudit;
@@ -521,7 +521,7 @@ pub fn save(
     as_: SaveAs,
 ) -> Result<()> {
     guard.check(flag, path)?;
-    let mut f = AtomicFile::create(path)?;
+    let mut f = OutputFile::create(path)?;
     let err = |e: std::io::Error| Error::Output {
         path: path.to_path_buf(),
         detail: e.to_string(),
@@ -577,7 +577,7 @@ pub fn save_mcap(
         path: path.to_path_buf(),
         detail: e.to_string(),
     };
-    let mut f = AtomicFile::create(path)?;
+    let mut f = OutputFile::create(path)?;
     {
         let file = f.file().try_clone().map_err(|e| Error::Output {
             path: path.to_path_buf(),

@@ -9,12 +9,13 @@ use super::offset_profile::OffsetProfile;
 use super::offset_search::OffsetSearch;
 use super::speed::SpeedFit;
 use super::top_view::TopView;
-use super::{file_stem, Figure, FigureData, Trajectories};
+use super::{Figure, FigureData, Trajectories};
 use crate::align::auto_params::reference_noise;
 use crate::align::curvature::CurvatureParams;
 use crate::align::speed::speed_profile;
 use crate::align::time_offset::{OffsetMethod, OffsetParams};
 use crate::clock::ClockCorrection;
+use crate::output::names::file_stem;
 use crate::report::json::{DriftErrorReport, EstimateReport, Parameters, Report, TimeOffsetStatus};
 use crate::trajectory::Trajectory;
 

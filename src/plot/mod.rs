@@ -20,6 +20,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::{Error, Result};
+/// The one file-safe mapping of a name (see [`crate::output::names`]).
+pub use crate::output::names::file_stem;
+use crate::output::names::file_stems;
 use crate::output::write_output;
 use crate::trajectory::Trajectory;
 pub use mission::mission_figures;
@@ -66,12 +69,12 @@ impl Figure {
         style::render_svg(&self.data)
     }
 
-    /// Writes `DIR/<name>.<ext>` (temporary file + rename) and returns its path.
+    /// Writes `DIR/<name>.<ext>` with the one file writer and returns its path.
     pub fn write(&self, dir: &Path, format: PlotFormat) -> Result<PathBuf> {
         let path = dir.join(format!("{}.{}", self.name, format.extension()));
         match format {
             PlotFormat::Svg => write_output(&path, self.svg()?.as_bytes())?,
-            PlotFormat::Png => style::render_png(&self.data, &path)?,
+            PlotFormat::Png => write_output(&path, &style::render_png(&self.data)?)?,
         }
         Ok(path)
     }
@@ -79,26 +82,35 @@ impl Figure {
 
 /// Writes every figure into `dir` (created if missing).
 pub fn write_figures(figures: &[Figure], dir: &Path, format: PlotFormat) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::Output {
-        path: dir.to_path_buf(),
-        detail: e.to_string(),
-    })?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::output(dir, &e))?;
     figures.iter().map(|f| f.write(dir, format)).collect()
 }
 
-/// A file-name-safe form of an estimate's name.
-pub fn file_stem(name: &str) -> String {
-    name.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' {
-                c
-            } else {
-                '_'
-            }
+/// The kinds of figure each estimate may get, the end of its file names (`<estimate>_<kind>`).
+pub const FIGURE_KINDS: [&str; 5] = [
+    "top_view",
+    "drift_error",
+    "offset_search",
+    "offset_profile",
+    "speed",
+];
+
+/// Every file `--plot DIR` may write for estimates named `names`, known before the evaluation so that
+/// each is claimed as an output first; refused when two names map to one file name.
+pub fn figure_files(dir: &Path, names: &[&str], format: PlotFormat) -> Result<Vec<PathBuf>> {
+    let stems = file_stems(
+        "estimates",
+        names.iter().copied(),
+        "name them with --estimate NAME=TOPIC",
+    )?;
+    Ok(stems
+        .iter()
+        .flat_map(|stem| {
+            FIGURE_KINDS
+                .iter()
+                .map(move |k| dir.join(format!("{stem}_{k}.{}", format.extension())))
         })
-        .collect::<String>()
-        .trim_matches('_')
-        .to_string()
+        .collect())
 }
 
 /// The trajectories a mission's figures are drawn from: the reference as the evaluation cropped it,
@@ -122,6 +134,23 @@ impl PictureOutputs {
     /// Whether anything is asked for.
     pub fn any(&self) -> bool {
         self.plot_dir.is_some() || self.html.is_some()
+    }
+
+    /// Claims every file these pictures may write for estimates named `estimates` (the HTML page, the
+    /// `--plot` folder and each figure in it) before the evaluation: refused when one is an input,
+    /// lies in an input folder, or is another output's path.
+    pub fn claim(&self, guard: &mut crate::output::OutputGuard, estimates: &[&str]) -> Result<()> {
+        if let Some(h) = &self.html {
+            guard.claim("--html", h)?;
+        }
+        if let Some(dir) = &self.plot_dir {
+            guard.claim_dir("--plot", dir)?;
+            let format = self.format.unwrap_or(PlotFormat::Svg);
+            for f in figure_files(dir, estimates, format)? {
+                guard.claim("--plot", &f)?;
+            }
+        }
+        Ok(())
     }
 
     /// Draws the figures of `report` and writes what is asked for; returns the files written.

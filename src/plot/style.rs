@@ -68,34 +68,33 @@ pub fn render_svg(figure: &impl Draw) -> Result<String> {
         figure.draw(&root)?;
         root.present().map_err(plot_err)?;
     }
-    Ok(s)
+    // Names in titles and legends come from the data: the document must stay valid XML.
+    Ok(crate::report::escape::xml(&s).into_owned())
 }
 
-/// Renders `figure` as a PNG file at `path` (written beside it under a temporary name, then renamed).
-pub fn render_png(figure: &impl Draw, path: &std::path::Path) -> Result<()> {
+/// Renders `figure` as PNG bytes (an RGB bitmap drawn in memory, encoded with the `png` crate), for
+/// the one file writer ([`crate::output::write_output`]).
+pub fn render_png(figure: &impl Draw) -> Result<Vec<u8>> {
     register_font();
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    // The bitmap encoder picks the format from the extension: the temporary name ends in .png.
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
-    let out = (|| {
-        let root = BitMapBackend::new(&tmp, SIZE).into_drawing_area();
+    let (w, h) = SIZE;
+    let mut rgb = vec![0u8; w as usize * h as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
         root.fill(&WHITE).map_err(plot_err)?;
         figure.draw(&root)?;
-        root.present().map_err(plot_err)
-    })()
-    .and_then(|_| {
-        std::fs::rename(&tmp, path).map_err(|e| Error::Output {
-            path: path.to_path_buf(),
-            detail: e.to_string(),
-        })
-    });
-    if out.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+        root.present().map_err(plot_err)?;
     }
-    out
+    let mut out = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut out, w, h);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder
+            .write_header()
+            .and_then(|mut writer| writer.write_image_data(&rgb))
+            .map_err(plot_err)?;
+    }
+    Ok(out)
 }
 
 /// Viridis at `f` in [0, 1] (clamped).

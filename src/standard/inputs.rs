@@ -96,6 +96,18 @@ impl MetricInputs {
         Ok(MetricInputs::Eval(Box::new(c)))
     }
 
+    /// Every file these inputs read (outputs are checked against them).
+    pub fn input_paths(&self) -> Vec<PathBuf> {
+        match self {
+            MetricInputs::Text {
+                reference,
+                estimate,
+                ..
+            } => vec![reference.clone(), estimate.clone()],
+            MetricInputs::Eval(c) => c.input_paths(),
+        }
+    }
+
     /// Reads both trajectories.
     pub fn load(&self, progress: Progress<'_>) -> Result<LoadedPair> {
         self.load_with(progress, true)

@@ -7,6 +7,7 @@ use trajdrift::eval::config::{EvalConfig, LeverSpec, NamedInput};
 use trajdrift::eval::evaluate_with_inputs;
 use trajdrift::eval::parameters::Parameters;
 use trajdrift::eval::preset::Preset;
+use trajdrift::output::{is_stdout, write_json, OutputGuard};
 use trajdrift::plot::{PictureOutputs, PlotFormat, Trajectories};
 use trajdrift::render::table;
 
@@ -72,32 +73,43 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
     Ok((c, notes))
 }
 
-/// `--plot DIR`, `--plot-format`, `--html FILE`; refuses an output that is the recording.
-pub fn pictures_from_args(
-    a: &EvalArgs,
-    recording: Option<&std::path::Path>,
-) -> Result<PictureOutputs> {
-    let same = |p: &std::path::Path| {
-        recording.is_some_and(|r| {
-            std::fs::canonicalize(r)
-                .ok()
-                .is_some_and(|r| std::fs::canonicalize(p).ok() == Some(r))
-        })
-    };
-    if let Some(h) = a.html.as_deref().filter(|h| same(h)) {
-        return Err(anyhow!(
-            "--html {} is the recording; choose another file",
-            h.display()
-        ));
-    }
-    Ok(PictureOutputs {
+/// `--plot DIR`, `--plot-format`, `--html FILE`.
+pub fn pictures_from_args(a: &EvalArgs) -> PictureOutputs {
+    PictureOutputs {
         plot_dir: a.plot.clone(),
         format: Some(match a.plot_format {
             PlotFormatArg::Svg => PlotFormat::Svg,
             PlotFormatArg::Png => PlotFormat::Png,
         }),
         html: a.html.clone(),
-    })
+    }
+}
+
+/// The output guard of the command: every input (the recordings, text files, KITTI times, a preset
+/// file) and every output claimed — `--json`, `--annotate`, `--export-aligned`, `--html`, `--plot`
+/// and each figure — before any work, so that an output over an input or over another output is
+/// refused (exit 2) while nothing has been read or written.
+pub fn claim_outputs(
+    a: &EvalArgs,
+    config: &EvalConfig,
+    pictures: &PictureOutputs,
+) -> Result<OutputGuard> {
+    let mut guard = config.output_guard();
+    if let Some(p) = a.preset.as_deref().map(std::path::Path::new) {
+        if p.is_file() {
+            guard.add(p);
+        }
+    }
+    if let Some(out) = &a.json {
+        guard.claim("--json", out)?;
+    }
+    if let Some(out) = &a.annotate {
+        guard.claim("--annotate", out)?;
+    }
+    config.claim_outputs(&mut guard)?;
+    let names: Vec<&str> = config.estimates.iter().map(|e| e.name.as_str()).collect();
+    pictures.claim(&mut guard, &names)?;
+    Ok(guard)
 }
 
 /// Runs the command; returns the exit code.
@@ -110,10 +122,8 @@ pub fn run(a: EvalArgs) -> Result<u8> {
             eprintln!("note: {}", trajdrift::report::escape::escape(n));
         }
     }
-    let guard = config.output_guard();
-    if let Some(out) = &a.json {
-        guard.check("--json", out)?;
-    }
+    let pictures = pictures_from_args(&a);
+    let guard = claim_outputs(&a, &config, &pictures)?;
     if let Some(out) = &a.annotate {
         // Refuse before the evaluation pass rather than after it.
         trajdrift::annotate::check_annotate(&config, out, a.force)?;
@@ -143,7 +153,6 @@ pub fn run(a: EvalArgs) -> Result<u8> {
             );
         }
     }
-    let pictures = pictures_from_args(&a, config.recording.as_deref())?;
     let estimates = inputs.named_estimates();
     let trajectories = Trajectories {
         reference: &inputs.reference.trajectory,
@@ -154,11 +163,10 @@ pub fn run(a: EvalArgs) -> Result<u8> {
             eprintln!("wrote {}", path.display());
         }
     }
-    let json_to_stdout = a.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
+    let json_to_stdout = a.json.as_deref().is_some_and(is_stdout);
     if let Some(path) = &a.json {
-        let mut bytes = serde_json::to_vec_pretty(&report)?;
-        bytes.push(b'\n');
-        guard.write("--json", path, &bytes)?;
+        guard.check("--json", path)?;
+        write_json(path, &report)?;
     }
     let table = !a.quiet && !json_to_stdout;
     if table {

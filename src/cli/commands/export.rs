@@ -22,13 +22,13 @@ pub fn run(mut a: ExportArgs) -> Result<u8> {
     }
     a.out = a.recording.pop().unwrap_or_default();
     // Refused before the pass, and again when written.
-    let guard = OutputGuard::new(
+    let mut guard = OutputGuard::new(
         a.recording
             .iter()
             .cloned()
             .chain(a.text.kitti_times.clone()),
     );
-    guard.check("OUT", &a.out)?;
+    guard.claim("OUT", &a.out)?;
     let first = &a.recording[0];
     let (source, topic): (Box<dyn Source>, String) = if a.recording.len() > 1 || is_recording(first)
     {

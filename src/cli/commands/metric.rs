@@ -13,7 +13,7 @@ use trajdrift::metrics::standard::filters::{downsample_ids, motion_filter_ids};
 use trajdrift::metrics::standard::{
     Alignment, Metric, MetricResult, Pipeline, Plane, PoseRelation, SyncMethod,
 };
-use trajdrift::output::{write_output, OutputGuard};
+use trajdrift::output::{is_stdout, write_json, OutputGuard};
 use trajdrift::plot::evo::{PlotMode, PlotTarget};
 use trajdrift::report::json::TimeOffsetStatus;
 use trajdrift::standard::inputs::{EvoFormat, LoadedPair, MetricInputs};
@@ -197,14 +197,15 @@ pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
     }
     let relation = PoseRelation::parse(&a.pose_relation)?;
     let inputs = inputs(a)?;
-    let guard = OutputGuard::new(input_paths(a));
+    // Every output claimed before any work: never an input, never two outputs on one path.
+    let mut guard = OutputGuard::new(input_paths(a));
     for (flag, out) in [
         ("--json", a.json.as_deref()),
         ("--save_results", evo.save_results.as_deref()),
         ("--logfile", evo.usability.logfile.as_deref()),
     ] {
         if let Some(out) = out {
-            guard.check(flag, out)?;
+            guard.claim(flag, out)?;
         }
     }
     let resolved = time_offset(a, &inputs)?;
@@ -288,11 +289,9 @@ pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
         "{} pairs; alignment {}: rotation {:?}, translation {:?} m, scale {}",
         result.pairs, al.method, al.rotation, al.translation_m, al.scale
     ));
-    let to_stdout = a.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
+    let to_stdout = a.json.as_deref().is_some_and(is_stdout);
     if let Some(path) = &a.json {
-        let mut bytes = serde_json::to_vec_pretty(&result)?;
-        bytes.push(b'\n');
-        write_output(path, &bytes)?;
+        write_json(path, &result)?;
     }
     if !to_stdout {
         log.result(&render(&result, relation, &pipeline))?;
@@ -351,14 +350,29 @@ pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
 }
 
 /// The files a metric reads: what an output must not overwrite.
-fn input_paths(a: &MetricArgs) -> Vec<std::path::PathBuf> {
+pub fn input_paths(a: &MetricArgs) -> Vec<std::path::PathBuf> {
     a.inputs
         .iter()
         .map(std::path::PathBuf::from)
         .chain(a.reference_file.iter().cloned())
         .chain(a.estimate_file.iter().cloned())
         .chain(a.text.kitti_times.iter().cloned())
+        .chain(
+            a.preset
+                .iter()
+                .map(std::path::PathBuf::from)
+                .filter(|p| p.is_file()),
+        )
         .collect()
+}
+
+/// The guard over the inputs, with `--json` claimed: refused before any work when it is an input.
+pub fn claim_json(a: &MetricArgs) -> trajdrift::Result<OutputGuard> {
+    let mut guard = OutputGuard::new(input_paths(a));
+    if let Some(out) = &a.json {
+        guard.claim("--json", out)?;
+    }
+    Ok(guard)
 }
 
 /// evo's `ref_name`/`est_name`: the files as given, the topics of the recording forms, else the

@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 
-use trajdrift::output::write_output;
+use trajdrift::output::{is_stdout, write_json};
 use trajdrift::standard::offsets::compare_offset_methods;
 
 use crate::cli::args::OffsetArgs;
@@ -11,17 +11,13 @@ use crate::cli::EXIT_OK;
 /// Runs the command; returns the exit code.
 pub fn run(a: OffsetArgs) -> Result<u8> {
     let inputs = super::metric::inputs(&a.common)?;
+    let guard = super::metric::claim_json(&a.common)?;
     let config = inputs.offset_config()?;
     let rows = compare_offset_methods(&config, a.spatial_range)?;
-    let to_stdout = a
-        .common
-        .json
-        .as_deref()
-        .is_some_and(|p| p.as_os_str() == "-");
+    let to_stdout = a.common.json.as_deref().is_some_and(is_stdout);
     if let Some(path) = &a.common.json {
-        let mut bytes = serde_json::to_vec_pretty(&rows)?;
-        bytes.push(b'\n');
-        write_output(path, &bytes)?;
+        guard.check("--json", path)?;
+        write_json(path, &rows)?;
     }
     if !to_stdout {
         let opt = |v: Option<f64>, w: usize, d: usize| {

@@ -3,12 +3,39 @@
 
 use anyhow::{anyhow, Result};
 
-use trajdrift::output::{write_output, AtomicFile};
+use trajdrift::output::{write_json, OutputFile, OutputGuard};
+use trajdrift::simulate::grandtour::{grandtour_files, write_grandtour, GrandTourOptions};
 use trajdrift::simulate::writer::{truth_json, write_mcap};
 use trajdrift::simulate::{default_route, route_of_duration, simulate, MissionConfig};
 
 use crate::cli::args::SimulateArgs;
 use crate::cli::EXIT_OK;
+
+/// `--grandtour`'s options: the bulk split over the sensor bags.
+fn grandtour_options(a: &SimulateArgs) -> GrandTourOptions {
+    GrandTourOptions {
+        merged: a.merged,
+        ..GrandTourOptions::default()
+    }
+}
+
+/// Every output claimed before anything is simulated: OUT (a file, or with `--grandtour` a folder and
+/// its bags) and `--truth`, never one path twice.
+fn claim_outputs(a: &SimulateArgs) -> Result<()> {
+    let mut guard = OutputGuard::default();
+    if a.grandtour {
+        guard.claim_dir("OUT", &a.out)?;
+        for f in grandtour_files(&a.out, &grandtour_options(a)) {
+            guard.claim("OUT", &f)?;
+        }
+    } else {
+        guard.claim("OUT", &a.out)?;
+    }
+    if let Some(path) = &a.truth {
+        guard.claim("--truth", path)?;
+    }
+    Ok(())
+}
 
 /// `--grandtour`: the mission as a folder of per-sensor bags (the bulk split over the sensor bags).
 fn grandtour(
@@ -16,18 +43,12 @@ fn grandtour(
     mission: &trajdrift::simulate::Mission,
     bulk_bytes: usize,
 ) -> Result<u8> {
-    use trajdrift::simulate::grandtour::{write_grandtour, GrandTourOptions};
-    let mut options = GrandTourOptions {
-        merged: a.merged,
-        ..GrandTourOptions::default()
-    };
+    let mut options = grandtour_options(a);
     let sensor_bags = options.bags.len() - 1;
     options.bulk_bytes = bulk_bytes / sensor_bags;
     let files = write_grandtour(&a.out, mission, &options)?;
     if let Some(path) = &a.truth {
-        let mut bytes = serde_json::to_vec_pretty(&truth_json(mission))?;
-        bytes.push(b'\n');
-        write_output(path, &bytes)?;
+        write_json(path, &truth_json(mission))?;
     }
     eprintln!(
         "wrote {} ({} bags, {:.0} s)",
@@ -41,11 +62,12 @@ fn grandtour(
 /// Runs the command; returns the exit code.
 pub fn run(a: SimulateArgs) -> Result<u8> {
     if a.out.exists() && !a.force {
-        return Err(anyhow!(
+        return Err(anyhow!(trajdrift::Error::InvalidArgument(format!(
             "{}: exists; pass --force to replace it",
             a.out.display()
-        ));
+        ))));
     }
+    claim_outputs(&a)?;
     let config = MissionConfig {
         seed: a.seed,
         time_offset_s: a.time_offset,
@@ -68,14 +90,20 @@ pub fn run(a: SimulateArgs) -> Result<u8> {
     if a.grandtour {
         return grandtour(&a, &mission, bulk_bytes);
     }
-    let mut target = AtomicFile::create(&a.out)?;
-    let file = target.file().try_clone()?;
-    write_mcap(std::io::BufWriter::new(file), &mission, bulk_bytes)?;
+    let mut target = OutputFile::create(&a.out)?;
+    let file = target
+        .file()
+        .try_clone()
+        .map_err(|e| trajdrift::Error::output(&a.out, &e))?;
+    write_mcap(std::io::BufWriter::new(file), &mission, bulk_bytes).map_err(|e| {
+        anyhow!(trajdrift::Error::Output {
+            path: a.out.clone(),
+            detail: e.to_string(),
+        })
+    })?;
     target.commit()?;
     if let Some(path) = &a.truth {
-        let mut bytes = serde_json::to_vec_pretty(&truth_json(&mission))?;
-        bytes.push(b'\n');
-        write_output(path, &bytes)?;
+        write_json(path, &truth_json(&mission))?;
     }
     eprintln!(
         "wrote {} ({:.0} s, {} reference and {} estimate samples)",

@@ -41,13 +41,22 @@ pub fn run(a: SweepArgs) -> Result<u8> {
     let (config, notes) = config_from_args(e)?;
     if !e.quiet {
         for n in &notes {
-            eprintln!("note: {n}");
+            eprintln!("note: {}", trajdrift::report::escape::escape(n));
         }
     }
     let param = param(a.param);
     let values = parse_values(&a.values)?;
-    std::fs::create_dir_all(&a.out)
-        .map_err(|err| anyhow!("cannot create {}: {err}", a.out.display()))?;
+    // DIR/sweep.csv and DIR/sweep.svg are claimed before any work: never over an input.
+    let mut guard = config.output_guard();
+    if let Some(p) = e.preset.as_deref().map(std::path::Path::new) {
+        if p.is_file() {
+            guard.add(p);
+        }
+    }
+    guard.claim_dir("--out", &a.out)?;
+    guard.claim("--out", &a.out.join("sweep.csv"))?;
+    guard.claim("--out", &a.out.join("sweep.svg"))?;
+    std::fs::create_dir_all(&a.out).map_err(|err| trajdrift::Error::output(&a.out, &err))?;
     let total = config
         .recording
         .as_ref()

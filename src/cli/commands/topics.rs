@@ -5,7 +5,7 @@ use std::fmt::Write;
 
 use anyhow::Result;
 
-use trajdrift::output::write_output;
+use trajdrift::output::{is_stdout, write_json, OutputGuard};
 use trajdrift::report::escape::escape;
 use trajdrift::sources::tf_frames::FramePair;
 use trajdrift::sources::{TopicInfo, Warning};
@@ -15,6 +15,10 @@ use crate::cli::{EXIT_OK, EXIT_WARNING};
 
 /// Runs the command; returns the exit code.
 pub fn run(a: TopicsArgs) -> Result<u8> {
+    let mut guard = OutputGuard::new(&a.recording);
+    if let Some(out) = &a.json {
+        guard.claim("--json", out)?;
+    }
     let source = trajdrift::sources::open_all(&a.recording)?;
     let files = mission_files(&a.recording)?;
     let mut topics = source.topics()?;
@@ -32,16 +36,15 @@ pub fn run(a: TopicsArgs) -> Result<u8> {
     }
     trajdrift::sources::tf_frames::attach(&mut topics, &pairs);
     let presets = trajdrift::eval::preset::matching(&topics);
-    let to_stdout = a.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
+    let to_stdout = a.json.as_deref().is_some_and(is_stdout);
     if let Some(path) = &a.json {
         let mut listing =
             serde_json::json!({ "topics": topics, "presets": presets, "warnings": warnings });
         if !files.is_empty() {
             listing["files"] = serde_json::to_value(&files)?;
         }
-        let mut bytes = serde_json::to_vec_pretty(&listing)?;
-        bytes.push(b'\n');
-        write_output(path, &bytes)?;
+        guard.check("--json", path)?;
+        write_json(path, &listing)?;
     }
     if !to_stdout {
         crate::cli::emit(&render(&topics, &pairs, &presets, &files))?;

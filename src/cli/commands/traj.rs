@@ -294,7 +294,7 @@ pub fn run(a: TrajArgs) -> Result<u8> {
             let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
             csv += &format!(
                 "{},{},{},{},{},{},{},{},{}\n",
-                t.name,
+                trajdrift::report::escape::csv_field(&t.name),
                 i.poses,
                 i.length_m,
                 o(i.duration_s),
@@ -316,6 +316,12 @@ pub fn run(a: TrajArgs) -> Result<u8> {
         if !on {
             continue;
         }
+        // Two names mapping to one file would overwrite each other: refused by name.
+        trajdrift::output::names::file_stems(
+            "trajectories",
+            all.iter().map(|t| t.name.as_str()),
+            "give them distinct names",
+        )?;
         for t in &all {
             let path = PathBuf::from(format!("{}.{ext}", stem(t)));
             save(&guard, flag, &path, &t.trajectory, fmt)?;

@@ -279,7 +279,8 @@ fn bulk_message(seq: u32, stamp: i64, n: usize) -> Vec<u8> {
 }
 
 /// Writes `messages` of `bags` (plus the bulk channel of each sensor bag) into one bag at `path`,
-/// through a temporary file renamed when complete.
+/// with the one file writer ([`crate::output::OutputFile`]: a temporary file renamed when complete,
+/// removed on failure).
 fn write_bag(
     path: &Path,
     mission: &Mission,
@@ -287,25 +288,20 @@ fn write_bag(
     bags: &[GrandTourBag],
     bulk_bytes: usize,
 ) -> Result<()> {
-    let io = |e: std::io::Error| Error::Output {
-        path: path.to_path_buf(),
-        detail: e.to_string(),
-    };
-    let tmp = path.with_extension(format!("bag.{}.tmp", std::process::id()));
-    let file = std::fs::File::create(&tmp).map_err(io)?;
-    let result = write_bag_to(
+    let mut target = crate::output::OutputFile::create(path)?;
+    let file = target
+        .file()
+        .try_clone()
+        .map_err(|e| Error::output(path, &e))?;
+    write_bag_to(
         std::io::BufWriter::new(file),
         mission,
         all,
         bags,
         bulk_bytes,
     )
-    .map_err(io)
-    .and_then(|_| std::fs::rename(&tmp, path).map_err(io));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    .map_err(|e| Error::output(path, &e))?;
+    target.commit()
 }
 
 fn write_bag_to<W: Write + Seek>(
@@ -363,6 +359,22 @@ fn write_bag_to<W: Write + Seek>(
     w.finish()?.flush()
 }
 
+/// The bags [`write_grandtour`] writes into `dir` with `options`, in name order (claimed as outputs
+/// before anything is written).
+pub fn grandtour_files(dir: &Path, options: &GrandTourOptions) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = if options.merged {
+        vec![dir.join(format!("{STAMP}_merged.bag"))]
+    } else {
+        options
+            .bags
+            .iter()
+            .map(|b| dir.join(b.file_name()))
+            .collect()
+    };
+    v.sort();
+    v
+}
+
 /// Writes `mission` into the folder `dir` (created if missing) as GrandTour-like bags; returns the
 /// files written, in name order.
 pub fn write_grandtour(
@@ -370,10 +382,7 @@ pub fn write_grandtour(
     mission: &Mission,
     options: &GrandTourOptions,
 ) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::Output {
-        path: dir.to_path_buf(),
-        detail: e.to_string(),
-    })?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::output(dir, &e))?;
     let all = messages(mission);
     let mut written = Vec::new();
     if options.merged {

@@ -102,7 +102,7 @@ fn matrix_of(v: &[f64]) -> (Matrix3<f64>, Vector3<f64>) {
 
 /// Calls `f(line index, 12 values)` for every pose row; a row of another width is an error.
 fn for_each_row(path: &Path, mut f: impl FnMut(usize, &[f64]) -> Result<()>) -> Result<()> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = crate::sources::input::open_text(path)?;
     for (i, line) in BufReader::new(file).lines().enumerate() {
         let line = line.map_err(|e| Error::io(path, e))?;
         let line = line.trim();
@@ -132,7 +132,7 @@ fn for_each_row(path: &Path, mut f: impl FnMut(usize, &[f64]) -> Result<()>) -> 
 
 /// Reads a KITTI `times.txt`: one time in seconds a row.
 pub fn read_times(path: &Path) -> Result<Vec<i64>> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = crate::sources::input::open_text(path)?;
     let mut out = Vec::new();
     for (i, line) in BufReader::new(file).lines().enumerate() {
         let line = line.map_err(|e| Error::io(path, e))?;

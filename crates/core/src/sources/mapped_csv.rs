@@ -184,7 +184,7 @@ pub struct CsvHeader {
 
 /// Reads the first row of a CSV file and picks its delimiter.
 pub fn read_header(path: &Path) -> Result<CsvHeader> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = crate::sources::input::open_text(path)?;
     let mut first = String::new();
     BufReader::new(file)
         .read_line(&mut first)
@@ -267,7 +267,7 @@ pub fn read_mapped_csv_audited(
         ]),
         None => None,
     };
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = crate::sources::input::open_text(path)?;
     let mut reader = csv::ReaderBuilder::new()
         .delimiter(head.delimiter)
         .has_headers(!head.is_data && !head.is_comment)

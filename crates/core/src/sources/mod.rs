@@ -6,6 +6,7 @@
 
 pub mod bag;
 pub mod extract;
+pub mod input;
 pub mod mcap;
 pub mod mission;
 pub mod open;

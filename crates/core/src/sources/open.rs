@@ -48,6 +48,7 @@ pub fn open_recording(path: &Path) -> Result<Part> {
             return Ok(Box::new(Rosbag2Source::open(dir)?));
         }
     }
+    super::input::require_seekable(path, "a recording")?;
     let mut head = [0u8; 8];
     let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let n = super::bag::records::read_full(&mut file, &mut head).map_err(|e| Error::io(path, e))?;
@@ -104,23 +105,42 @@ pub fn is_recording(path: &Path) -> bool {
         return true;
     }
     let mut head = [0u8; 8];
-    let n = std::fs::File::open(path)
-        .and_then(|mut f| super::bag::records::read_full(&mut f, &mut head))
-        .unwrap_or(0);
+    // A stream (a pipe, a FIFO) is read once and kept, so looking at its first bytes loses nothing.
+    let n = if super::input::is_stream(path) {
+        super::input::open_text(path)
+            .ok()
+            .and_then(|mut f| super::bag::records::read_full(&mut f, &mut head).ok())
+            .unwrap_or(0)
+    } else {
+        std::fs::File::open(path)
+            .and_then(|mut f| super::bag::records::read_full(&mut f, &mut head))
+            .unwrap_or(0)
+    };
     head[..n].starts_with(b"#ROSBAG") || head[..n] == *mcap::MAGIC
 }
 
-/// Bytes of an input for a progress bar: a file's size, or the sum over a folder's recordings.
+/// Bytes of an input for a progress bar: a file's size, or the sum over a folder's files (two levels
+/// down at most, each folder counted once: a symlink loop ends).
 pub fn input_size(path: &Path) -> u64 {
-    if !path.is_dir() {
-        return std::fs::metadata(path).map_or(0, |m| m.len());
+    fn walk(path: &Path, depth: usize, seen: &mut Vec<PathBuf>) -> u64 {
+        if !path.is_dir() {
+            return std::fs::metadata(path).map_or(0, |m| m.len());
+        }
+        let Ok(real) = path.canonicalize() else {
+            return 0;
+        };
+        if depth > 2 || seen.contains(&real) {
+            return 0;
+        }
+        seen.push(real);
+        std::fs::read_dir(path)
+            .map(|entries| {
+                entries
+                    .filter_map(|e| e.ok())
+                    .map(|e| walk(&e.path(), depth + 1, seen))
+                    .sum()
+            })
+            .unwrap_or(0)
     }
-    std::fs::read_dir(path)
-        .map(|entries| {
-            entries
-                .filter_map(|e| e.ok())
-                .map(|e| input_size(&e.path()))
-                .sum()
-        })
-        .unwrap_or(0)
+    walk(path, 0, &mut Vec::new())
 }

@@ -67,7 +67,7 @@ pub fn detect_format(path: &Path) -> Result<TextFormat> {
     if is_csv_ext || (!head.is_data && !head.is_comment && head.columns.len() > 1) {
         return Ok(TextFormat::Csv);
     }
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = crate::sources::input::open_text(path)?;
     for (i, line) in BufReader::new(file).lines().enumerate() {
         let line = line.map_err(|e| Error::io(path, e))?;
         let line = line.trim();

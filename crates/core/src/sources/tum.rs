@@ -64,7 +64,7 @@ fn read_rows(
     orientation: bool,
     compact: bool,
 ) -> Result<(Trajectory, Option<TumOrientations>)> {
-    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut file = crate::sources::input::open_text(path)?;
     let mut rows = RowReader {
         path,
         orientation,
@@ -173,7 +173,7 @@ fn decimal(neg: bool, m: u64, frac: usize) -> f64 {
 }
 
 /// One `read`, retried when interrupted.
-fn read_some(file: &mut std::fs::File, buf: &mut [u8]) -> std::io::Result<usize> {
+fn read_some(file: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
     loop {
         match file.read(buf) {
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,

@@ -55,7 +55,9 @@ pub fn read(dir: &Path) -> Result<Metadata> {
         path: dir.to_path_buf(),
         detail,
     };
-    let text = std::fs::read_to_string(&path).map_err(|e| {
+    // metadata.yaml lists the files and topics: a few kilobytes, 16 MiB for the largest recordings.
+    let text = crate::sources::input::read_text_bounded(&path, 16 << 20, "rosbag2 metadata.yaml")
+        .map_err(|e| {
         bad(format!(
             "cannot read metadata.yaml ({e}); pass a rosbag2 folder, a .bag or a .mcap file"
         ))
