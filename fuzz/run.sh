@@ -8,7 +8,7 @@
 set -e
 cd "$(dirname "$0")/.."
 RUNS=${RUNS:-1000000}
-TARGETS=${*:-"cdr_decode tf_decode text_readers bag_reader mcap_source"}
+TARGETS=${*:-"cdr_decode tf_decode text_readers bag_reader mcap_source manifest_preset merge_results"}
 for t in $TARGETS; do
     mkdir -p "fuzz/work/$t"
     echo "== $t"

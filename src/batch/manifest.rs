@@ -33,8 +33,12 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::eval::config::{EvalConfig, NamedInput};
+use crate::eval::layer_check::{check_layer, refusal, Naming};
 use crate::eval::parameters::Parameters;
 use crate::eval::preset::Preset;
+
+/// The largest manifest read (ten thousand missions take about 2 MB).
+pub const MAX_MANIFEST_BYTES: u64 = 16 << 20;
 
 /// One mission as written in the manifest.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -112,9 +116,12 @@ pub struct Manifest {
     pub missions: Vec<MissionSpec>,
 }
 
-/// True for names usable as file names everywhere: letters, digits, `.`, `_`, `-`.
-fn valid_name(n: &str) -> bool {
+/// True for names usable as file names everywhere: letters, digits, `.`, `_`, `-`, not starting with
+/// `.`, at most 200 characters (`<name>_figures` and the temporary files stay under the 255 bytes a
+/// file name may have).
+pub fn valid_name(n: &str) -> bool {
     !n.is_empty()
+        && n.len() <= 200
         && !n.starts_with('.')
         && n.chars()
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
@@ -124,7 +131,8 @@ impl Manifest {
     /// Reads a TOML manifest; relative recording paths are relative to its folder. `cli`: the
     /// command line's parameters, over every mission's.
     pub fn from_toml(path: &Path, cli: &Parameters) -> Result<Manifest> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        check_layer(cli, "the command line", Naming::Flags)?;
+        let text = crate::sources::input::read_text_bounded(path, MAX_MANIFEST_BYTES, "manifest")?;
         let file: File = toml::from_str(&text).map_err(|e| {
             Error::InvalidArgument(format!(
                 "{}: not a valid manifest: {}",
@@ -136,17 +144,18 @@ impl Manifest {
         let origin = path.display().to_string();
         let (default_preset, defaults) =
             split_table(file.defaults, &format!("{origin}: [defaults]"))?;
+        check_layer(&defaults, &format!("{origin}: [defaults]"), Naming::Keys)?;
         let mut missions = Vec::with_capacity(file.mission.len());
         for m in file.mission {
             let recording = base.join(&m.recording);
             let name = m.name.clone().unwrap_or_else(|| stem(&m.recording));
+            let shown = crate::report::escape::escape(&name).into_owned();
             let reference = m.reference.as_deref().map(NamedInput::topic);
             let estimates: Vec<NamedInput> =
                 m.estimates.iter().map(|e| NamedInput::topic(e)).collect();
-            let (mission_preset, own) = split_table(
-                m.parameters,
-                &format!("{origin}: mission {name}: [mission.parameters]"),
-            )?;
+            let where_ = format!("{origin}: mission {shown}: [mission.parameters]");
+            let (mission_preset, own) = split_table(m.parameters, &where_)?;
+            check_layer(&own, &where_, Naming::Keys)?;
             let preset = m.preset.or(mission_preset).or(default_preset.clone());
             let config = mission_config(
                 recording,
@@ -154,8 +163,9 @@ impl Manifest {
                 estimates,
                 preset.as_deref().map(|p| (p, base)),
                 &[&defaults, &own, cli],
+                Naming::Keys,
             )
-            .map_err(|e| Error::InvalidArgument(format!("{origin}: mission {name}: {e}")))?;
+            .map_err(|e| refusal(&format!("{origin}: mission {shown}"), &e))?;
             missions.push(MissionSpec { name, config });
         }
         let manifest = Manifest { missions };
@@ -181,10 +191,9 @@ impl Manifest {
                         .collect(),
                     request.preset.as_deref().map(|s| (s, Path::new("."))),
                     &[&request.parameters],
+                    Naming::Flags,
                 )
-                .map_err(|e| {
-                    Error::InvalidArgument(format!("{}: mission {name}: {e}", dir.display()))
-                })?;
+                .map_err(|e| refusal(&format!("{}: mission {name}", dir.display()), &e))?;
                 Ok(MissionSpec { name, config })
             })
             .collect::<Result<Vec<_>>>()?;
@@ -203,8 +212,8 @@ impl Manifest {
         for m in &self.missions {
             if !valid_name(&m.name) {
                 return Err(Error::InvalidArgument(format!(
-                    "{origin}: mission name `{}`: use letters, digits, `.`, `_` and `-` only",
-                    m.name
+                    "{origin}: mission name `{}`: use letters, digits, `.`, `_` and `-` only, not starting with `.`, at most 200",
+                    crate::report::escape::escape(&m.name)
                 )));
             }
             if names.contains(&m.name.as_str()) {
@@ -227,6 +236,7 @@ fn mission_config(
     estimates: Vec<NamedInput>,
     preset: Option<(&str, &Path)>,
     layers: &[&Parameters],
+    naming: Naming,
 ) -> Result<EvalConfig> {
     let (mut config, preset_parameters) = match preset {
         Some((spec, base)) => {
@@ -247,6 +257,12 @@ fn mission_config(
     };
     config.params =
         Parameters::layered(std::iter::once(&preset_parameters).chain(layers.iter().copied()));
+    // Every value is checked now, not when the mission runs: a manifest's mistake is a usage error
+    // before any mission starts, naming the key (a combination of layers, e.g. t_start after t_end).
+    if naming == Naming::Keys {
+        config.params.validate_as(&|key| key.to_string())?;
+    }
+    config.validate()?;
     Ok(config)
 }
 

@@ -5,7 +5,9 @@
 //! [`discover`] finds the missions of a folder, [`manifest`] reads what to run, [`run`] runs it, [`summary`] aggregates, [`shard`] splits.
 
 pub mod discover;
+pub mod identity;
 pub mod manifest;
+pub mod merge;
 pub mod run;
 pub mod shard;
 pub mod summary;

@@ -9,13 +9,14 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use super::identity::{BatchLock, Fingerprint, RunRecord, RunStatus};
 use super::manifest::{Manifest, MissionSpec};
 use super::shard::Shard;
 use super::summary::{MissionResult, Summary, Timing, MISSION_KIND};
 use crate::annotate::annotate;
 use crate::error::{Error, Result};
 use crate::eval::evaluate_with_inputs;
-use crate::output::{write_output, OutputGuard};
+use crate::output::{write_json, OutputGuard};
 
 /// How to run a batch.
 #[derive(Debug, Clone)]
@@ -28,12 +29,15 @@ pub struct BatchOptions {
     pub annotate: bool,
     /// Replace existing annotated recordings.
     pub force: bool,
-    /// Keep the result of a mission already done (its JSON says `ok`, and its `.mcap` exists with
-    /// `--annotate`) instead of running it again.
+    /// Keep the result of a mission already done instead of running it again: only one that is `ok`,
+    /// computed with the same parameters from the same inputs, with every output asked for present.
     pub skip_existing: bool,
     pub shard: Option<Shard>,
     /// Per-mission figures (`<mission>_figures/`, in this format) and/or `<mission>.html`.
     pub pictures: MissionPictures,
+    /// The files the missions were found from (the manifest, or the folder of recordings): no output
+    /// may be one of them or lie inside the folder.
+    pub inputs: Vec<PathBuf>,
 }
 
 /// What pictures each mission gets (`batch --plot [--plot-format F] --html`).
@@ -86,23 +90,45 @@ pub fn result_path(out_dir: &Path, mission: &str) -> PathBuf {
     out_dir.join(format!("{mission}.json"))
 }
 
-fn previous(opts: &BatchOptions, m: &MissionSpec) -> Option<MissionResult> {
-    let text = std::fs::read(result_path(&opts.out_dir, &m.name)).ok()?;
-    let r: MissionResult = serde_json::from_slice(&text).ok()?;
-    let mcap_ok = !opts.annotate || opts.out_dir.join(format!("{}.mcap", m.name)).exists();
-    (r.kind == MISSION_KIND && r.status == "ok" && r.mission == m.name && mcap_ok).then_some(r)
+/// The largest per-mission result read back (a two-hour mission's result is a few megabytes).
+pub const MAX_RESULT_BYTES: u64 = 256 << 20;
+
+/// The result of `m` kept from an earlier run, when it can be reused: it parses, it is `ok`, it was
+/// computed with the same parameters from the same inputs (its [`Fingerprint`] matches the mission as
+/// it is now), and every output asked for now (annotated recording, figures, HTML page) is there.
+fn previous(opts: &BatchOptions, m: &MissionSpec, now: &Fingerprint) -> Option<MissionResult> {
+    let bytes = crate::sources::input::read_bounded(
+        &result_path(&opts.out_dir, &m.name),
+        MAX_RESULT_BYTES,
+        "mission result",
+    )
+    .ok()?;
+    let r: MissionResult = serde_json::from_slice(&bytes).ok()?;
+    let same = r.fingerprint.as_ref() == Some(now) && now.inputs.is_some();
+    let outputs = (!opts.annotate
+        || r.annotated.is_some() && opts.out_dir.join(format!("{}.mcap", m.name)).is_file())
+        && (opts.pictures.plot.is_none()
+            || opts.out_dir.join(format!("{}_figures", m.name)).is_dir())
+        && (!opts.pictures.html || opts.out_dir.join(format!("{}.html", m.name)).is_file());
+    (r.kind == MISSION_KIND && r.status == "ok" && r.mission == m.name && same && outputs)
+        .then_some(r)
 }
 
-/// Runs the batch and writes every per-mission result and the summary into `opts.out_dir`.
+/// Missions at once: `--jobs` (0: the number of cores), never more than the missions to run nor four
+/// threads a core (more would only compete for the same cores and memory).
+pub fn effective_jobs(requested: usize, missions: usize) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let asked = if requested == 0 { cores } else { requested };
+    asked.min(missions).min(4 * cores).max(1)
+}
+
+/// Runs the batch and writes every per-mission result, the run record and the summary into
+/// `opts.out_dir`. Every output is claimed before any mission runs; the folder is locked for the run.
 pub fn run_batch(
     manifest: &Manifest,
     opts: &BatchOptions,
     progress: BatchProgress<'_>,
 ) -> Result<BatchOutcome> {
-    std::fs::create_dir_all(&opts.out_dir).map_err(|e| Error::Output {
-        path: opts.out_dir.clone(),
-        detail: e.to_string(),
-    })?;
     let names: Vec<&str> = manifest.missions.iter().map(|m| m.name.as_str()).collect();
     let keep = opts
         .shard
@@ -113,29 +139,50 @@ pub fn run_batch(
         .zip(keep)
         .filter_map(|(m, k)| k.then_some(m))
         .collect();
+    let mut guard = input_guard(manifest, opts);
+    guard.claim_dir("--out", &opts.out_dir)?;
+    std::fs::create_dir_all(&opts.out_dir).map_err(|e| Error::output(&opts.out_dir, &e))?;
+    let _lock = BatchLock::acquire(&opts.out_dir, opts.shard)?;
+    crate::output::remove_all_stale_temps(&opts.out_dir);
     let mut results = Vec::new();
     let mut skipped = Vec::new();
     let mut todo = Vec::new();
-    for m in selected {
-        match opts.skip_existing.then(|| previous(opts, m)).flatten() {
+    for m in &selected {
+        let now = Fingerprint::of(&m.config);
+        match opts
+            .skip_existing
+            .then(|| previous(opts, m, &now))
+            .flatten()
+        {
             Some(r) => {
                 skipped.push(m.name.clone());
                 results.push(r);
             }
-            None => todo.push(m),
+            None => todo.push((*m, now)),
         }
     }
-    check_outputs(&todo, opts)?;
+    claim_outputs(&mut guard, &selected, opts)?;
+    check_existing(&todo, opts)?;
+    let all: Vec<(&str, &crate::eval::config::EvalConfig)> = manifest
+        .missions
+        .iter()
+        .map(|m| (m.name.as_str(), &m.config))
+        .collect();
+    let selected_names: Vec<&str> = selected.iter().map(|m| m.name.as_str()).collect();
+    let mut record = RunRecord::new(&all, opts.shard, &selected_names);
+    let record_path = opts.out_dir.join(RunRecord::file_name(opts.shard));
+    write_json(&record_path, &record)?;
     progress(BatchEvent::Planned {
         missions: todo.len(),
     });
+    let jobs = effective_jobs(opts.jobs, todo.len());
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opts.jobs)
+        .num_threads(jobs)
         .build()
-        .map_err(|e| Error::InvalidArgument(format!("--jobs {}: {e}", opts.jobs)))?;
+        .map_err(|e| Error::InvalidArgument(format!("--jobs {jobs}: {e}")))?;
     let ran: Vec<Result<MissionResult>> = pool.install(|| {
         todo.par_iter()
-            .map(|m| run_mission(m, opts, progress))
+            .map(|(m, fingerprint)| run_mission(m, fingerprint, opts, progress))
             .collect()
     });
     for r in ran {
@@ -147,6 +194,8 @@ pub fn run_batch(
         Some(shard) => summary.write_as(&opts.out_dir, &shard.summary_stem())?,
         None => summary.write(&opts.out_dir)?,
     }
+    record.status = RunStatus::Complete;
+    write_json(&record_path, &record)?;
     Ok(BatchOutcome {
         results,
         skipped,
@@ -154,26 +203,91 @@ pub fn run_batch(
     })
 }
 
-/// Refuses the batch (a usage error) when an output it would write is one of a mission's inputs:
-/// `<mission>.json`, `<mission>.mcap`, the summaries, or an `--export-aligned` file.
-fn check_outputs(todo: &[&MissionSpec], opts: &BatchOptions) -> Result<()> {
-    let all = OutputGuard::new(todo.iter().flat_map(|m| m.config.input_paths()));
-    for name in ["summary.json", "summary.csv", "summary.md"] {
-        all.check("--out", &opts.out_dir.join(name))?;
+/// Every input of the batch: each mission's files and folders, and the manifest or folder it came from.
+fn input_guard(manifest: &Manifest, opts: &BatchOptions) -> OutputGuard {
+    let mut guard = OutputGuard::new(manifest.missions.iter().flat_map(|m| {
+        let mut v = m.config.input_paths();
+        v.extend(m.config.more_recordings.iter().cloned());
+        v
+    }));
+    for p in &opts.inputs {
+        guard.add(p);
     }
-    for m in todo {
-        all.check("--out", &result_path(&opts.out_dir, &m.name))?;
+    guard
+}
+
+/// Claims, before any mission runs, every file this run writes into `--out`: each mission's result
+/// (and annotated recording, figures, HTML page), the summaries and the run record. Refused (exit 2)
+/// when one is an input or when two of them are one file — a mission named `summary` would take the
+/// summary's name, two estimates mapping to one figure name would overwrite each other.
+fn claim_outputs(
+    guard: &mut OutputGuard,
+    selected: &[&MissionSpec],
+    opts: &BatchOptions,
+) -> Result<()> {
+    let stem = opts
+        .shard
+        .map_or_else(|| "summary".to_string(), |s| s.summary_stem());
+    for ext in ["json", "csv", "md", "html"] {
+        guard.claim(
+            "the batch summary",
+            &opts.out_dir.join(format!("{stem}.{ext}")),
+        )?;
+    }
+    guard.claim(
+        "the run record",
+        &opts.out_dir.join(RunRecord::file_name(opts.shard)),
+    )?;
+    for m in selected {
+        let who = format!("mission `{}`", m.name);
+        guard.claim(&who, &result_path(&opts.out_dir, &m.name))?;
         if opts.annotate {
-            all.check("--annotate", &opts.out_dir.join(format!("{}.mcap", m.name)))?;
+            guard.claim(&who, &opts.out_dir.join(format!("{}.mcap", m.name)))?;
+            crate::annotate::channel_topics(&m.config)
+                .map_err(|e| Error::InvalidArgument(format!("mission {}: {e}", m.name)))?;
         }
-        m.config.check_outputs()?;
+        let names: Vec<&str> = m.config.estimates.iter().map(|e| e.name.as_str()).collect();
+        opts.pictures
+            .outputs(&opts.out_dir, &m.name)
+            .claim(guard, &names)
+            .map_err(|e| match e {
+                Error::InvalidArgument(msg) => {
+                    Error::InvalidArgument(format!("mission {}: {msg}", m.name))
+                }
+                e => e,
+            })?;
+        m.config.claim_outputs(guard)?;
     }
     Ok(())
+}
+
+/// Refuses (exit 2, before any work) a run that would replace an existing annotated recording without
+/// `--force`: the mission would fail after its evaluation and its good result turn into a failure.
+fn check_existing(todo: &[(&MissionSpec, Fingerprint)], opts: &BatchOptions) -> Result<()> {
+    if !opts.annotate || opts.force {
+        return Ok(());
+    }
+    let existing: Vec<String> = todo
+        .iter()
+        .map(|(m, _)| opts.out_dir.join(format!("{}.mcap", m.name)))
+        .filter(|p| p.exists())
+        .map(|p| p.display().to_string())
+        .collect();
+    if existing.is_empty() {
+        return Ok(());
+    }
+    Err(Error::InvalidArgument(format!(
+        "{} exist{}; pass --force to replace {}, or --skip-existing to keep the missions already done",
+        existing.join(", "),
+        if existing.len() == 1 { "s" } else { "" },
+        if existing.len() == 1 { "it" } else { "them" }
+    )))
 }
 
 /// Runs one mission and writes `<mission>.json`; only a failure to write that file is an `Err`.
 fn run_mission(
     m: &MissionSpec,
+    fingerprint: &Fingerprint,
     opts: &BatchOptions,
     progress: BatchProgress<'_>,
 ) -> Result<MissionResult> {
@@ -248,17 +362,12 @@ fn run_mission(
         status: status.into(),
         error,
         annotated: (opts.annotate && report.is_some()).then_some(mcap_name),
+        fingerprint: Some(fingerprint.clone()),
         report,
         timing: Timing {
             seconds: start.elapsed().as_secs_f64(),
         },
     };
-    let path = result_path(&opts.out_dir, &m.name);
-    let mut bytes = serde_json::to_vec_pretty(&result).map_err(|e| Error::Output {
-        path: path.clone(),
-        detail: e.to_string(),
-    })?;
-    bytes.push(b'\n');
-    write_output(&path, &bytes)?;
+    write_json(&result_path(&opts.out_dir, &m.name), &result)?;
     Ok(result)
 }

@@ -68,13 +68,16 @@ impl Shard {
         ))
     }
 
-    /// A Slurm job array: task `ID` of `COUNT` tasks numbered from `MIN` in steps of `STEP`.
+    /// A Slurm job array: task `ID` of `COUNT` tasks numbered from `MIN` to `MAX` in steps of `STEP`;
+    /// the shard is the task's rank in the array. An array given as a list of indices
+    /// (`--array=1,3,7`) is not an evenly spaced range: its ranks cannot be known from these variables,
+    /// so it is refused rather than mapped wrongly (1 and 7 would run as shards 1 and 3, and shard 2
+    /// never).
     fn from_slurm(shards: Option<usize>, env: &dyn Fn(&str) -> Option<String>) -> Result<Shard> {
         let id = env_number(env, "SLURM_ARRAY_TASK_ID")?.unwrap_or(0);
         let min = env_number(env, "SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
-        let step = env_number(env, "SLURM_ARRAY_TASK_STEP")?
-            .unwrap_or(1)
-            .max(1);
+        let max = env_number(env, "SLURM_ARRAY_TASK_MAX")?;
+        let step_var = env_number(env, "SLURM_ARRAY_TASK_STEP")?;
         let count = match (env_number(env, "SLURM_ARRAY_TASK_COUNT")?, shards) {
             (Some(c), Some(n)) if c != n => {
                 return Err(Error::InvalidArgument(format!(
@@ -89,6 +92,35 @@ impl Shard {
                 ))
             }
         };
+        let list = |why: &str| {
+            Error::InvalidArgument(format!(
+                "--shard auto: the Slurm array (SLURM_ARRAY_TASK_MIN={min}, MAX={}, COUNT={count}, STEP={}) {why}: a list of indices such as --array=1,3,7 cannot be mapped onto shards; submit an evenly spaced range (--array=0-{}) or pass --shard I/N",
+                max.map_or("unset".into(), |m| m.to_string()),
+                step_var.map_or("unset".into(), |s| s.to_string()),
+                count.saturating_sub(1)
+            ))
+        };
+        let step = match (step_var, max) {
+            (Some(s), _) if s > 0 => s,
+            (Some(_), _) => return Err(list("has a step of 0")),
+            // No step given: the one an evenly spaced range from MIN to MAX would have.
+            (None, Some(max)) if count > 1 => {
+                let span = max
+                    .checked_sub(min)
+                    .ok_or_else(|| list("ends before it starts"))?;
+                if span % (count - 1) != 0 {
+                    return Err(list("is not evenly spaced"));
+                }
+                (span / (count - 1)).max(1)
+            }
+            (None, _) => 1,
+        };
+        if let Some(max) = max {
+            let last = min.checked_add(step.saturating_mul(count.saturating_sub(1)));
+            if count == 0 || last != Some(max) {
+                return Err(list("is not the evenly spaced range MIN, MIN+STEP, …, MAX"));
+            }
+        }
         if id < min || (id - min) % step != 0 {
             return Err(Error::InvalidArgument(format!(
                 "--shard auto: SLURM_ARRAY_TASK_ID={id} is not in the array {min}, {min}+{step}, …"
@@ -216,6 +248,50 @@ mod tests {
         let s = Shard::resolve("auto", None, &stepped).unwrap();
         assert_eq!(s, Shard { index: 3, count: 3 });
         assert!(Shard::resolve("auto", Some(4), &env).is_err());
+    }
+
+    #[test]
+    fn slurm_list_arrays_are_refused_and_ranges_mapped_by_rank() {
+        let task = |id: &str, min: &str, max: &str, count: &str, step: Option<&str>| {
+            let mut v = vec![
+                ("SLURM_ARRAY_TASK_ID", id),
+                ("SLURM_ARRAY_TASK_MIN", min),
+                ("SLURM_ARRAY_TASK_MAX", max),
+                ("SLURM_ARRAY_TASK_COUNT", count),
+            ];
+            if let Some(s) = step {
+                v.push(("SLURM_ARRAY_TASK_STEP", s));
+            }
+            Shard::resolve("auto", None, &vars(&v))
+        };
+        // --array=1,3,7: never shards 1 and 3 of 3 with 2 missing.
+        for id in ["1", "3", "7"] {
+            for step in [Some("1"), None, Some("3")] {
+                let r = task(id, "1", "7", "3", step);
+                if let Ok(s) = r {
+                    // Only the evenly spaced reading 1,4,7 with step 3 maps, and 3 is not in it.
+                    assert_eq!(step, Some("3"), "{id}: {s:?}");
+                    assert!(id != "3");
+                }
+            }
+            let e = task(id, "1", "7", "3", Some("1")).unwrap_err().to_string();
+            assert!(
+                e.contains("--array=1,3,7") && e.contains("--shard I/N"),
+                "{e}"
+            );
+        }
+        // --array=2-10:4 (2, 6, 10): ranks 0, 1, 2.
+        for (id, index) in [("2", 1), ("6", 2), ("10", 3)] {
+            assert_eq!(
+                task(id, "2", "10", "3", Some("4")).unwrap(),
+                Shard { index, count: 3 }
+            );
+            assert_eq!(
+                task(id, "2", "10", "3", None).unwrap(),
+                Shard { index, count: 3 }
+            );
+        }
+        assert!(task("5", "5", "5", "1", Some("1")).is_ok());
     }
 
     #[test]

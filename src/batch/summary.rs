@@ -6,12 +6,14 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
-use crate::output::write_output;
+use super::identity::Fingerprint;
+use crate::error::Result;
+use crate::output::{write_json, write_output};
+use crate::report::escape::{csv_field, markdown};
 use crate::report::json::Report;
 use crate::stats::summarize;
 
@@ -38,11 +40,26 @@ pub struct MissionResult {
     /// The annotated recording's file name, with `--annotate`.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub annotated: Option<String>,
+    /// What the result was computed from (absent in results of older versions: never reused).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub fingerprint: Option<Fingerprint>,
     pub report: Option<Report>,
     pub timing: Timing,
 }
 
 impl MissionResult {
+    /// The codes of the warnings the user must see (what makes `eval` exit 3), in order, once each.
+    pub fn warning_codes(&self) -> Vec<String> {
+        let mut v: Vec<String> = Vec::new();
+        for w in self.report.iter().flat_map(|r| &r.warnings) {
+            let code = w.code.as_str().to_string();
+            if !v.contains(&code) {
+                v.push(code);
+            }
+        }
+        v
+    }
+
     /// True when some estimate's offset was weak.
     pub fn weak(&self) -> bool {
         self.report.as_ref().is_some_and(|r| {
@@ -92,6 +109,14 @@ pub struct FailedMission {
     pub error: String,
 }
 
+/// A mission that finished with warnings the user must see (those that make `eval` exit 3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WarnedMission {
+    pub mission: String,
+    /// Warning codes, e.g. `truncated_recording`, `weak_time_offset`, `lever_arm_suspected`.
+    pub warnings: Vec<String>,
+}
+
 /// `summary.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
@@ -99,6 +124,14 @@ pub struct Summary {
     pub failed: Vec<FailedMission>,
     /// Missions with a weak offset.
     pub weak: Vec<String>,
+    /// Missions that finished with a warning (a weak offset among them), with the warnings' codes.
+    #[serde(default)]
+    pub warned: Vec<WarnedMission>,
+    /// A merge of an incomplete or inconsistent set (`merge --allow-partial`): what is wrong with it.
+    #[serde(skip_serializing_if = "std::ops::Not::not", default)]
+    pub partial: bool,
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub problems: Vec<String>,
     pub estimates: Vec<EstimateSummary>,
     /// Seconds per mission (machine-dependent; everything else is not).
     pub timing: BTreeMap<String, f64>,
@@ -167,6 +200,18 @@ impl Summary {
                 .filter(|r| r.weak())
                 .map(|r| r.mission.clone())
                 .collect(),
+            warned: sorted
+                .iter()
+                .filter_map(|r| {
+                    let codes = r.warning_codes();
+                    (!codes.is_empty()).then(|| WarnedMission {
+                        mission: r.mission.clone(),
+                        warnings: codes,
+                    })
+                })
+                .collect(),
+            partial: false,
+            problems: Vec::new(),
             estimates,
             timing: sorted
                 .iter()
@@ -175,39 +220,48 @@ impl Summary {
         }
     }
 
-    /// The batch's exit code: 1 when a mission failed, else 3 when an offset was weak, else 0.
+    /// The batch's exit code, as `eval`'s: 1 when a mission failed, else 3 when a mission finished
+    /// with a warning (or the summary is partial), else 0.
     pub fn exit_code(&self) -> u8 {
         if !self.failed.is_empty() {
             1
-        } else if !self.weak.is_empty() {
+        } else if !self.warned.is_empty() || !self.weak.is_empty() || self.partial {
             3
         } else {
             0
         }
     }
 
-    /// One CSV row per mission, estimate and window; failed missions with their error.
+    /// One CSV row per mission, estimate and window; failed missions with their error. Text cells
+    /// through the CSV sink ([`csv_field`]: no formula, one line).
     pub fn to_csv(&self) -> String {
         let mut s = String::from(
-            "mission,estimate,window_m,status,dt_s,offset_status,confidence,de_rmse,error,ape_rmse_m,rpe_1m_rmse_m\n",
+            "mission,estimate,window_m,status,dt_s,offset_status,confidence,de_rmse,error,ape_rmse_m,rpe_1m_rmse_m,warnings\n",
         );
         let opt = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+        let warnings = |mission: &str| {
+            self.warned
+                .iter()
+                .find(|w| w.mission == mission)
+                .map_or(String::new(), |w| csv_field(&w.warnings.join(" ")))
+        };
         let mut rows: Vec<(String, String)> = Vec::new();
         for e in &self.estimates {
             for m in &e.missions {
                 rows.push((
                     m.mission.clone(),
                     format!(
-                        "{},{},{},ok,{},{},{},{},,{},{}\n",
-                        csv(&m.mission),
-                        csv(&e.estimate),
+                        "{},{},{},ok,{},{},{},{},,{},{},{}\n",
+                        csv_field(&m.mission),
+                        csv_field(&e.estimate),
                         e.window_m,
                         m.dt_s,
-                        m.offset_status,
+                        csv_field(&m.offset_status.to_string()),
                         opt(m.confidence),
                         opt(m.de_rmse),
                         opt(m.ape_rmse_m),
-                        opt(m.rpe_1m_rmse_m)
+                        opt(m.rpe_1m_rmse_m),
+                        warnings(&m.mission)
                     ),
                 ));
             }
@@ -215,7 +269,11 @@ impl Summary {
         for f in &self.failed {
             rows.push((
                 f.mission.clone(),
-                format!("{},,,failed,,,,,{},,\n", csv(&f.mission), csv(&f.error)),
+                format!(
+                    "{},,,failed,,,,,{},,,\n",
+                    csv_field(&f.mission),
+                    csv_field(&f.error)
+                ),
             ));
         }
         rows.sort_by(|a, b| a.0.cmp(&b.0));
@@ -225,23 +283,34 @@ impl Summary {
         s
     }
 
-    /// A Markdown page: one table per estimate and window, then the failures.
+    /// A Markdown page: one table per estimate and window, then the warnings and the failures; every
+    /// name and message through the Markdown sink ([`markdown`]).
     pub fn to_markdown(&self) -> String {
         let mut s = String::from("# trajdrift batch summary\n\n");
         let pct = |v: Option<f64>| v.map_or("–".into(), |x| format!("{:.2} %", 100.0 * x));
         let metres = |v: Option<f64>| v.map_or("–".into(), |x| format!("{x:.4}"));
+        if self.partial {
+            s.push_str(
+                "**Partial**: merged from an incomplete or inconsistent set of results:\n\n",
+            );
+            for p in &self.problems {
+                let _ = writeln!(s, "- {}", markdown(p));
+            }
+            s.push('\n');
+        }
         let _ = writeln!(
             s,
-            "{} missions, {} failed, {} with a weak offset.\n",
+            "{} missions, {} failed, {} with a warning ({} with a weak offset).\n",
             self.missions,
             self.failed.len(),
+            self.warned.len(),
             self.weak.len()
         );
         for e in &self.estimates {
             let _ = writeln!(
                 s,
                 "## {} — {} m windows\n\nn = {}, DE RMSE median {}, IQR {} ({} – {})\n",
-                e.estimate,
+                markdown(&e.estimate),
                 e.window_m,
                 e.n,
                 pct(e.de_rmse_median),
@@ -256,9 +325,9 @@ impl Summary {
                 let _ = writeln!(
                     s,
                     "| {} | {:+.4} | {} | {} | {} | {} | {} |",
-                    m.mission,
+                    markdown(&m.mission),
                     m.dt_s,
-                    m.offset_status,
+                    markdown(&m.offset_status.to_string()),
                     m.confidence.map_or("–".into(), |c| format!("{c:.2}")),
                     pct(m.de_rmse),
                     metres(m.ape_rmse_m),
@@ -267,10 +336,22 @@ impl Summary {
             }
             s.push('\n');
         }
+        if !self.warned.is_empty() {
+            s.push_str("## Missions with a warning\n\n| mission | warnings |\n|---|---|\n");
+            for w in &self.warned {
+                let _ = writeln!(
+                    s,
+                    "| {} | {} |",
+                    markdown(&w.mission),
+                    markdown(&w.warnings.join(", "))
+                );
+            }
+            s.push('\n');
+        }
         if !self.failed.is_empty() {
             s.push_str("## Failed missions\n\n| mission | error |\n|---|---|\n");
             for f in &self.failed {
-                let _ = writeln!(s, "| {} | {} |", f.mission, f.error.replace('|', "\\|"));
+                let _ = writeln!(s, "| {} | {} |", markdown(&f.mission), markdown(&f.error));
             }
         }
         s
@@ -284,71 +365,12 @@ impl Summary {
     /// Writes `STEM.json`, `STEM.csv` and `STEM.md` into `dir` (a shard writes its own stem).
     pub fn write_as(&self, dir: &Path, stem: &str) -> Result<()> {
         let path = |ext: &str| dir.join(format!("{stem}.{ext}"));
-        let mut json = serde_json::to_vec_pretty(self).map_err(|e| Error::Output {
-            path: path("json"),
-            detail: e.to_string(),
-        })?;
-        json.push(b'\n');
-        write_output(&path("json"), &json)?;
+        write_json(&path("json"), self)?;
         write_output(&path("csv"), self.to_csv().as_bytes())?;
         write_output(&path("md"), self.to_markdown().as_bytes())?;
         let html = super::summary_html::render(self, dir);
         write_output(&path("html"), html.as_bytes())
     }
-}
-
-fn csv(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\"").replace('\n', " "))
-    } else {
-        s.to_string()
-    }
-}
-
-/// Reads every per-mission result (`*.json` with `kind` = [`MISSION_KIND`]) in `dirs`; a mission found
-/// twice is an error.
-pub fn read_results(dirs: &[PathBuf]) -> Result<Vec<MissionResult>> {
-    let mut out: Vec<MissionResult> = Vec::new();
-    for dir in dirs {
-        let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
-            .map_err(|e| Error::io(dir, e))?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|e| e == "json"))
-            .collect();
-        paths.sort();
-        for p in paths {
-            let Ok(text) = std::fs::read(&p) else {
-                continue;
-            };
-            let Ok(value) = serde_json::from_slice::<serde_json::Value>(&text) else {
-                continue;
-            };
-            if value.get("kind").and_then(|k| k.as_str()) != Some(MISSION_KIND) {
-                continue;
-            }
-            let r: MissionResult = serde_json::from_value(value).map_err(|e| {
-                Error::InvalidArgument(format!("{}: not a mission result: {e}", p.display()))
-            })?;
-            if out.iter().any(|x| x.mission == r.mission) {
-                return Err(Error::InvalidArgument(format!(
-                    "{}: mission `{}` appears twice in the folders merged",
-                    p.display(),
-                    r.mission
-                )));
-            }
-            out.push(r);
-        }
-    }
-    if out.is_empty() {
-        return Err(Error::InvalidArgument(format!(
-            "no mission result (*.json from `trajdrift batch`) in {}",
-            dirs.iter()
-                .map(|d| d.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
-    }
-    Ok(out)
 }
 
 /// The RMSE of one standard metric of an estimate, when computed.

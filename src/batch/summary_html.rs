@@ -13,10 +13,20 @@ use crate::report::escape::html as escape;
 
 /// The page for `summary`, whose per-mission files are in `dir`.
 pub fn render(summary: &Summary, dir: &Path) -> String {
-    let mut b = format!(
-        "<h1>trajdrift batch summary</h1>\n<p>{} missions, {} failed, {} with a weak offset.</p>\n",
+    let mut b = String::from("<h1>trajdrift batch summary</h1>\n");
+    if summary.partial {
+        b.push_str("<div class=\"warn\"><p><b>Partial</b>: merged from an incomplete or inconsistent set of results:</p><ul>");
+        for p in &summary.problems {
+            let _ = write!(b, "<li>{}</li>", escape(p));
+        }
+        b.push_str("</ul></div>\n");
+    }
+    let _ = writeln!(
+        b,
+        "<p>{} missions, {} failed, {} with a warning ({} with a weak offset).</p>",
         summary.missions,
         summary.failed.len(),
+        summary.warned.len(),
         summary.weak.len()
     );
     let figure = DeDistribution {
@@ -37,6 +47,10 @@ pub fn render(summary: &Summary, dir: &Path) -> String {
     }
     b.push_str("<h2>Missions</h2>\n<table><tr><th>mission</th><th>estimate</th><th>w (m)</th><th>Δt (s)</th><th>offset</th><th>confidence</th><th>DE RMSE</th><th>report</th></tr>\n");
     let link = |mission: &str| {
+        // A name that is not a safe file name (it came from a JSON file) gets no link.
+        if !super::manifest::valid_name(mission) {
+            return "–".to_string();
+        }
         let html = format!("{mission}.html");
         let target = if dir.join(&html).exists() {
             html
@@ -63,6 +77,17 @@ pub fn render(summary: &Summary, dir: &Path) -> String {
         }
     }
     b.push_str("</table>\n");
+    if !summary.warned.is_empty() {
+        b.push_str("<h2>Missions with a warning</h2>\n");
+        for w in &summary.warned {
+            let _ = writeln!(
+                b,
+                "<p class=\"warn\">{}: {}</p>",
+                escape(&w.mission),
+                escape(&w.warnings.join(", "))
+            );
+        }
+    }
     if !summary.failed.is_empty() {
         b.push_str("<h2>Failed missions</h2>\n");
         for f in &summary.failed {

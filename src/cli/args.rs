@@ -447,9 +447,13 @@ pub struct MergeArgs {
     /// Folders holding per-mission results (<mission>.json).
     #[arg(required = true)]
     pub dirs: Vec<PathBuf>,
-    /// Where to write summary.{json,csv,md} (default: the first folder).
+    /// Where to write summary.{json,csv,md,html} (default: the first folder).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Merge an incomplete or inconsistent set anyway (missing shards, mismatched parameters,
+    /// unreadable results): the summary is marked partial and lists what is wrong (exit 3 at best).
+    #[arg(long)]
+    pub allow_partial: bool,
     /// Print nothing but errors.
     #[arg(long, short)]
     pub quiet: bool,

@@ -138,6 +138,9 @@ fn split_name(spec: &str) -> (Option<String>, &str) {
     }
 }
 
+/// The most estimates one evaluation takes.
+pub const MAX_ESTIMATES: usize = 256;
+
 /// A full evaluation request.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EvalConfig {
@@ -372,6 +375,12 @@ impl EvalConfig {
             return bad(format!(
                 "two estimates are named `{}`; name them with --estimate NAME=TOPIC",
                 w[0]
+            ));
+        }
+        if self.estimates.len() > MAX_ESTIMATES {
+            return bad(format!(
+                "{} estimates; at most {MAX_ESTIMATES} in one evaluation",
+                self.estimates.len()
             ));
         }
         // Every value against the one parameter table (flag, value and range in the refusal).

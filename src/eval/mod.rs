@@ -5,6 +5,7 @@ pub mod config;
 pub mod export;
 pub mod extrinsics;
 pub mod inputs;
+pub mod layer_check;
 pub mod parameters;
 pub mod preset;
 pub mod sweep;

@@ -26,6 +26,9 @@ pub const BUILTIN: [(&str, &str); 3] = [
     ("fomo", include_str!("../../presets/fomo.toml")),
 ];
 
+/// The largest preset file read (the built-in ones are under 4 KiB).
+pub const MAX_PRESET_BYTES: u64 = 1 << 20;
+
 /// The reference of a preset: alternative topics, and what to tell the user when none is present.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -114,6 +117,11 @@ impl Preset {
                 "{origin}: a preset needs at least one [[estimate]], each with topics = [...]"
             )));
         }
+        crate::eval::layer_check::check_layer(
+            &p.parameters,
+            &format!("{origin}: [parameters]"),
+            crate::eval::layer_check::Naming::Keys,
+        )?;
         Ok(p)
     }
 
@@ -130,8 +138,8 @@ impl Preset {
         }
         let path = base.join(spec);
         let path = path.as_path();
-        if spec.ends_with(".toml") || path.is_file() {
-            let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        if spec.ends_with(".toml") || path.is_file() || crate::sources::input::is_stream(path) {
+            let text = crate::sources::input::read_text_bounded(path, MAX_PRESET_BYTES, "preset")?;
             return Preset::parse(&text, spec);
         }
         Err(Error::InvalidArgument(format!(

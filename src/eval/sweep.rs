@@ -85,8 +85,11 @@ impl SweepParam {
     }
 }
 
-/// Parses `0.05,0.1,0.2` or `A:B:STEP` (A to B inclusive). Values are rounded to 1e-9 so that a
-/// generated 0.15 is the 0.15 a user would type.
+/// The most values a sweep takes.
+pub const MAX_VALUES: usize = 10_000;
+
+/// Parses `0.05,0.1,0.2` or `A:B:STEP` (A to B inclusive), duplicates dropped, at most
+/// [`MAX_VALUES`]. Values are rounded to 1e-9 so that a generated 0.15 is the 0.15 a user would type.
 pub fn parse_values(s: &str) -> Result<Vec<f64>> {
     let bad = |why: &str| {
         Error::InvalidArgument(format!(
@@ -103,13 +106,16 @@ pub fn parse_values(s: &str) -> Result<Vec<f64>> {
             return Err(bad("a range needs A ≤ B and STEP > 0"));
         }
         let n = ((b - a) / step + 1e-9).floor() as usize + 1;
-        if n > 10_000 {
+        if n > MAX_VALUES {
             return Err(bad("more than 10000 values"));
         }
         (0..n)
             .map(|k| ((a + k as f64 * step) * 1e9).round() / 1e9)
             .collect()
     } else {
+        if s.split(',').count() > MAX_VALUES {
+            return Err(bad("more than 10000 values"));
+        }
         s.split(',')
             .map(|x| num(x).ok_or_else(|| bad("not a number")))
             .collect::<Result<_>>()?
@@ -117,7 +123,14 @@ pub fn parse_values(s: &str) -> Result<Vec<f64>> {
     if values.is_empty() {
         return Err(bad("no value"));
     }
-    Ok(values)
+    // A value given twice is evaluated once.
+    let mut unique: Vec<f64> = Vec::with_capacity(values.len());
+    for v in values {
+        if !unique.iter().any(|u| u.to_bits() == v.to_bits()) {
+            unique.push(v);
+        }
+    }
+    Ok(unique)
 }
 
 /// The numbers one (value, estimate, window size) contributes to the sweep.

@@ -6,10 +6,13 @@ use trajdrift::batch::manifest::{FolderRequest, Manifest};
 use trajdrift::batch::run::{run_batch, BatchOptions, MissionPictures};
 use trajdrift::batch::shard::Shard;
 
+use trajdrift::report::escape::escape;
+
 use crate::cli::args::{BatchArgs, PlotFormatArg};
 use crate::cli::batch_progress::BatchBars;
 
-/// Runs the command; returns the exit code (1 when a mission failed, else 3 when an offset was weak).
+/// Runs the command; returns the exit code, as `eval`'s: 1 when a mission failed, else 3 when a mission
+/// finished with a warning (the summary says which), else 0.
 pub fn run(a: BatchArgs) -> Result<u8> {
     let manifest = if a.input.is_dir() {
         if a.reference.is_none() && a.preset.is_none() {
@@ -66,6 +69,7 @@ pub fn run(a: BatchArgs) -> Result<u8> {
             }),
             html: a.html,
         },
+        inputs: vec![a.input.clone()],
     };
     let bars = BatchBars::new(a.quiet);
     let outcome = run_batch(&manifest, &opts, &|e| bars.event(e));
@@ -73,10 +77,21 @@ pub fn run(a: BatchArgs) -> Result<u8> {
     let outcome = outcome.map_err(|e| anyhow!(e))?;
     let s = &outcome.summary;
     for f in &s.failed {
-        eprintln!("error: mission {}: {}", f.mission, f.error);
+        eprintln!(
+            "error: mission {}: {}",
+            escape(&f.mission),
+            escape(&f.error)
+        );
     }
-    for w in &s.weak {
-        eprintln!("warning [weak_time_offset]: mission {w}: an estimate's offset is weak");
+    for w in &s.warned {
+        for r in outcome.results.iter().filter(|r| r.mission == w.mission) {
+            for warning in r.report.iter().flat_map(|r| &r.warnings) {
+                crate::cli::warn(&trajdrift::diag::Warning {
+                    code: warning.code,
+                    message: format!("mission {}: {}", w.mission, warning.message),
+                });
+            }
+        }
     }
     if !a.quiet {
         crate::cli::emit(&s.to_markdown())?;

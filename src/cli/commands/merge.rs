@@ -1,28 +1,60 @@
 //! `trajdrift merge`: the summary of a batch from the per-mission results of several folders (the
-//! shards of a cluster run).
+//! shards of a cluster run), checked first: an incomplete or inconsistent set is said by name and
+//! exits 1, unless `--allow-partial`.
 
 use anyhow::Result;
 
-use trajdrift::batch::summary::{read_results, Summary};
+use trajdrift::batch::merge::read_set;
+use trajdrift::batch::summary::Summary;
+use trajdrift::output::OutputGuard;
+use trajdrift::report::escape::escape;
 
 use crate::cli::args::MergeArgs;
 
-/// Runs the command; returns the batch's exit code (1 when a mission failed, else 3 when an offset was
-/// weak).
+/// Runs the command; returns the batch's exit code (1 when the set is incomplete or a mission failed,
+/// else 3 when a mission finished with a warning or the summary is partial).
 pub fn run(a: MergeArgs) -> Result<u8> {
-    let results = read_results(&a.dirs)?;
-    let summary = Summary::build(&results);
+    let set = read_set(&a.dirs)?;
+    for p in &set.skipped {
+        if !a.quiet {
+            eprintln!(
+                "note: {}: not a trajdrift result, skipped",
+                escape(&p.display().to_string())
+            );
+        }
+    }
+    for p in &set.problems {
+        eprintln!("error: merge: {}", escape(p));
+    }
+    if !set.problems.is_empty() && !a.allow_partial {
+        eprintln!(
+            "error: merge: the set is incomplete or inconsistent ({} problem{}); nothing written (pass --allow-partial to merge it anyway, marked partial)",
+            set.problems.len(),
+            if set.problems.len() == 1 { "" } else { "s" }
+        );
+        return Ok(1);
+    }
+    let mut summary = Summary::build(&set.results);
+    summary.partial = !set.problems.is_empty();
+    summary.problems = set.problems.clone();
     let out = a.out.clone().unwrap_or_else(|| a.dirs[0].clone());
-    std::fs::create_dir_all(&out).map_err(|e| trajdrift::Error::Output {
-        path: out.clone(),
-        detail: e.to_string(),
-    })?;
+    // The summary never replaces a file it was built from.
+    let mut guard = OutputGuard::new(&set.files);
+    guard.claim_dir("--out", &out)?;
+    for ext in ["json", "csv", "md", "html"] {
+        guard.claim("the summary", &out.join(format!("summary.{ext}")))?;
+    }
+    std::fs::create_dir_all(&out).map_err(|e| trajdrift::Error::output(&out, &e))?;
     summary.write(&out)?;
     if !a.quiet {
         crate::cli::emit(&summary.to_markdown())?;
     }
     for f in &summary.failed {
-        eprintln!("error: mission {}: {}", f.mission, f.error);
+        eprintln!(
+            "error: mission {}: {}",
+            escape(&f.mission),
+            escape(&f.error)
+        );
     }
     Ok(summary.exit_code())
 }

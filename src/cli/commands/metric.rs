@@ -14,7 +14,9 @@ use trajdrift::metrics::standard::{
     Alignment, Metric, MetricResult, Pipeline, Plane, PoseRelation, SyncMethod,
 };
 use trajdrift::output::{is_stdout, write_json, OutputGuard};
+use trajdrift::params::{Bound, Range};
 use trajdrift::plot::evo::{PlotMode, PlotTarget};
+use trajdrift::report::escape::escape;
 use trajdrift::report::json::TimeOffsetStatus;
 use trajdrift::standard::inputs::{EvoFormat, LoadedPair, MetricInputs};
 
@@ -22,6 +24,58 @@ use crate::cli::args::{text_options, MetricArgs};
 use crate::cli::evo_args::{ignored_notes, EvoMetricArgs};
 use crate::cli::evo_log::EvoLog;
 use crate::cli::{EXIT_OK, EXIT_WARNING};
+
+/// A range check of an evo flag, refused like `eval`'s (flag, value, range; exit 2).
+fn in_range(
+    flag: &str,
+    v: f64,
+    min: Bound,
+    max: Bound,
+    unit: &'static str,
+) -> trajdrift::Result<f64> {
+    Range { min, max, unit }.check(flag, v)
+}
+
+/// Every numeric flag shared by `ape`, `rpe` and `offset`, checked before anything is read: NaN,
+/// infinities, negative or zero tolerances are refused naming the flag.
+pub fn validate(a: &MetricArgs) -> trajdrift::Result<()> {
+    use Bound::{Exclusive, Inclusive};
+    in_range(
+        "--t_max_diff",
+        a.t_max_diff,
+        Exclusive(0.0),
+        Inclusive(86_400.0),
+        "s",
+    )?;
+    if let Some(t) = a.t_offset {
+        in_range("--t_offset", t, Inclusive(-1.0e10), Inclusive(1.0e10), "s")?;
+    }
+    if let Some(s) = a.time_offset.as_deref().filter(|s| *s != "auto") {
+        let t = s.parse::<f64>().map_err(|_| {
+            trajdrift::Error::InvalidArgument(format!(
+                "--time-offset {s}: expected seconds or `auto`"
+            ))
+        })?;
+        in_range(
+            "--time-offset",
+            t,
+            Inclusive(-1.0e10),
+            Inclusive(1.0e10),
+            "s",
+        )?;
+    }
+    for (flag, v) in [("--t_start", a.t_start), ("--t_end", a.t_end)] {
+        if let Some(v) = v {
+            in_range(flag, v, Inclusive(-1.0e10), Inclusive(1.0e10), "s")?;
+        }
+    }
+    if a.n_to_align == Some(0) {
+        return Err(trajdrift::Error::InvalidArgument(
+            "--n_to_align 0: align on at least 1 pair (leave it out to align on all)".into(),
+        ));
+    }
+    Ok(())
+}
 
 /// The inputs named on the command line: evo's positional form, or the native one.
 pub fn inputs(a: &MetricArgs) -> Result<MetricInputs> {
@@ -195,6 +249,7 @@ pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
     ]) {
         log.warn(&note);
     }
+    validate(a)?;
     let relation = PoseRelation::parse(&a.pose_relation)?;
     let inputs = inputs(a)?;
     // Every output claimed before any work: never an input, never two outputs on one path.
@@ -222,6 +277,26 @@ pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
     } = inputs.load_with(&|_| {}, orientation)?;
     if let Some(model) = &resolved.model {
         estimate = model.apply_to_poses(estimate);
+    }
+    // One pose (or one stamp, written again) is no trajectory: refused by name rather than measured.
+    for (label, poses) in [(&reference_label, &reference), (&estimate_label, &estimate)] {
+        let distinct = match &poses.stamps_s {
+            Some(t) => {
+                let mut t: Vec<u64> = t.iter().map(|x| x.to_bits()).collect();
+                t.sort_unstable();
+                t.dedup();
+                t.len()
+            }
+            None => poses.len(),
+        };
+        if distinct < 2 {
+            return Err(trajdrift::Error::TooFewSamples {
+                what: format!("{} (distinct stamps)", escape(label)),
+                n: distinct,
+                need: 2,
+            }
+            .into());
+        }
     }
     log.detail(&format!(
         "reference {reference_label}: {} poses; estimate {estimate_label}: {} poses",

@@ -3,13 +3,24 @@
 use anyhow::Result;
 
 use trajdrift::output::{is_stdout, write_json};
-use trajdrift::standard::offsets::compare_offset_methods;
+use trajdrift::report::escape::escape;
+use trajdrift::standard::offsets::{compare_offset_methods, OffsetRow};
 
 use crate::cli::args::OffsetArgs;
 use crate::cli::EXIT_OK;
 
-/// Runs the command; returns the exit code.
+/// The widest spatial search: 6000 APE evaluations at 0.1 s.
+const MAX_SPATIAL_RANGE_S: f64 = 300.0;
+
+/// Runs the command; returns the exit code: 1 when every method failed.
 pub fn run(a: OffsetArgs) -> Result<u8> {
+    super::metric::validate(&a.common)?;
+    trajdrift::params::Range {
+        min: trajdrift::params::Bound::Exclusive(0.0),
+        max: trajdrift::params::Bound::Inclusive(MAX_SPATIAL_RANGE_S),
+        unit: "s",
+    }
+    .check("--spatial-range", a.spatial_range)?;
     let inputs = super::metric::inputs(&a.common)?;
     let guard = super::metric::claim_json(&a.common)?;
     let config = inputs.offset_config()?;
@@ -38,10 +49,26 @@ pub fn run(a: OffsetArgs) -> Result<u8> {
                 opt(r.ape_rmse_m, 13, 4),
                 r.error
                     .as_deref()
-                    .map_or(String::new(), |e| format!("  {e}"))
+                    .map_or(String::new(), |e| format!("  {}", escape(e)))
             );
         }
         println!("quality: peak NCC for speed/curvature/signed-curvature/auto, the APE rmse (m) for spatial");
+    }
+    let methods: Vec<&OffsetRow> = rows.iter().filter(|r| r.method != "none").collect();
+    if methods.iter().all(|r| r.offset_s.is_none()) {
+        return Err(trajdrift::Error::Metric(format!(
+            "every offset method failed ({}); check the inputs overlap in time and move",
+            methods
+                .iter()
+                .map(|r| format!(
+                    "{}: {}",
+                    r.method,
+                    r.error.as_deref().map_or("failed".into(), escape)
+                ))
+                .collect::<Vec<_>>()
+                .join("; ")
+        ))
+        .into());
     }
     Ok(EXIT_OK)
 }

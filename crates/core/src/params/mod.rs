@@ -223,6 +223,9 @@ const fn range_of(min: f64, max: f64, unit: &'static str) -> Range {
     }
 }
 
+/// The most Drift Error window sizes one evaluation takes (duplicates are dropped first).
+pub const MAX_WINDOWS: usize = 64;
+
 impl Parameters {
     /// The one merge order: `layers` from the lowest (a preset) to the highest (the command line).
     pub fn layered<'a>(layers: impl IntoIterator<Item = &'a Parameters>) -> Parameters {
@@ -253,6 +256,13 @@ impl Parameters {
             return Err(Error::InvalidArgument(format!(
                 "{} needs at least one size in metres",
                 name("window")
+            )));
+        }
+        if let Some(w) = self.window.as_ref().filter(|w| w.len() > MAX_WINDOWS) {
+            return Err(Error::InvalidArgument(format!(
+                "{}: {} sizes; give at most {MAX_WINDOWS} (each size is a full Drift Error pass)",
+                name("window"),
+                w.len()
             )));
         }
         if let (Some(a), Some(b)) = (self.t_start, self.t_end) {

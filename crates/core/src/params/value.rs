@@ -107,13 +107,23 @@ impl ParamValue for f64 {
     }
 }
 
+/// `v` with each number once, in the order first given (a window size given twice is computed once).
+fn distinct(v: Vec<f64>) -> Vec<f64> {
+    let mut seen = std::collections::HashSet::with_capacity(v.len());
+    v.into_iter().filter(|x| seen.insert(x.to_bits())).collect()
+}
+
 impl ParamValue for Vec<f64> {
     const KIND: ValueKind = ValueKind::Numbers;
     fn from_items(items: &[String]) -> std::result::Result<Self, String> {
-        items.iter().map(|s| number(s)).collect()
+        items
+            .iter()
+            .map(|s| number(s))
+            .collect::<std::result::Result<Vec<f64>, String>>()
+            .map(distinct)
     }
     fn deserialize_value<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        Vec::<f64>::deserialize(d)
+        Vec::<f64>::deserialize(d).map(distinct)
     }
     fn show(&self) -> String {
         self.iter()
