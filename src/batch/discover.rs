@@ -6,7 +6,8 @@
 //! folder**: all its recordings are one mission (GrandTour ships a mission as one bag per sensor
 //! group), named after the subfolder. A subfolder of MCAP files and rosbag2 folders only holds one
 //! mission per recording, named `<subfolder>-<name>` (how runs of MCAP recordings are kept). Hidden
-//! entries (a `.name.tmp` being written) are skipped. Names keep letters, digits, `.`, `_`, `-`.
+//! entries (a `.name.tmp` being written) are skipped, and a folder reached twice (a symlink to the
+//! folder itself, a loop) is walked once. Names keep letters, digits, `.`, `_`, `-`.
 
 use std::path::{Path, PathBuf};
 
@@ -24,10 +25,20 @@ pub struct FoundMission {
 /// The missions in `dir`, sorted by name.
 pub fn missions_in(dir: &Path) -> Result<Vec<FoundMission>> {
     let mut out = Vec::new();
+    // Each folder is walked once: a symlink to the folder itself or to a sibling (a loop, or a
+    // second name) adds nothing.
+    let mut seen: Vec<PathBuf> = dir.canonicalize().into_iter().collect();
     for p in entries(dir)? {
         if is_recording_entry(&p) {
             out.push(found(dir, &p));
         } else if p.is_dir() {
+            let Ok(real) = p.canonicalize() else {
+                continue;
+            };
+            if seen.contains(&real) {
+                continue;
+            }
+            seen.push(real);
             let inner: Vec<PathBuf> = entries(&p)?
                 .into_iter()
                 .filter(|q| is_recording_entry(q))

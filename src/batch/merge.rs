@@ -170,22 +170,16 @@ fn check_runs(
         ));
         return;
     };
+    // Runs of the same missions with the same parameters are one batch however it was sharded (an
+    // unsharded run and the shards of another cover the same results).
     for (p, r) in &runs[1..] {
-        if r.run_id == first.run_id {
+        if r.parameters == first.parameters {
             continue;
         }
-        let what = if r.parameters != first.parameters {
-            if r.missions.keys().eq(first.missions.keys()) {
-                "mismatched parameters".to_string()
-            } else {
-                "different missions".to_string()
-            }
+        let what = if r.missions.keys().eq(first.missions.keys()) {
+            "mismatched parameters"
         } else {
-            format!(
-                "different shard counts ({} and {})",
-                first.shard.map_or(1, |s| s.count),
-                r.shard.map_or(1, |s| s.count)
-            )
+            "different missions"
         };
         set.problems.push(format!(
             "{} and {} are records of different runs: {what}; merge the shards of one run",
@@ -195,10 +189,15 @@ fn check_runs(
     }
     let same: Vec<&(PathBuf, RunRecord)> = runs
         .iter()
-        .filter(|(_, r)| r.run_id == first.run_id)
+        .filter(|(_, r)| r.parameters == first.parameters)
+        .collect();
+    let covered: std::collections::BTreeSet<&String> = same
+        .iter()
+        .filter(|(_, r)| r.status == RunStatus::Complete)
+        .flat_map(|(_, r)| &r.selected)
         .collect();
     for (p, r) in &same {
-        if r.status == RunStatus::Running {
+        if r.status == RunStatus::Running && r.selected.iter().any(|m| !covered.contains(m)) {
             set.problems.push(format!(
                 "{}: its run did not finish (killed, or still running): re-run it{}",
                 p.display(),
@@ -209,26 +208,31 @@ fn check_runs(
             ));
         }
     }
-    // Which missions the records present were asked for; a sharded run needs every shard.
-    let whole = same.iter().any(|(_, r)| r.shard.is_none());
-    let mut asked: Vec<&String> = same.iter().flat_map(|(_, r)| &r.selected).collect();
-    asked.sort();
-    asked.dedup();
-    if !whole {
-        let count = first.shard.map_or(1, |s| s.count);
-        for i in 1..=count {
-            if !same
-                .iter()
-                .any(|(_, r)| r.shard.is_some_and(|s| s.index == i))
-            {
-                set.problems.push(format!(
-                    "missing shard {i} of {count} (no trajdrift-run-shard-{i}-of-{count}.json): run it with --shard {i}/{count}"
-                ));
+    // Missions of the batch no record asked for: the shards that would have are missing.
+    let asked: std::collections::BTreeSet<&String> =
+        same.iter().flat_map(|(_, r)| &r.selected).collect();
+    if first.missions.keys().any(|m| !asked.contains(m)) {
+        let mut counts: Vec<usize> = same
+            .iter()
+            .filter_map(|(_, r)| r.shard.map(|s| s.count))
+            .collect();
+        counts.sort_unstable();
+        counts.dedup();
+        for count in counts {
+            for i in 1..=count {
+                if !same
+                    .iter()
+                    .any(|(_, r)| r.shard.is_some_and(|s| s.index == i && s.count == count))
+                {
+                    set.problems.push(format!(
+                        "missing shard {i} of {count} (no trajdrift-run-shard-{i}-of-{count}.json): run it with --shard {i}/{count}"
+                    ));
+                }
             }
         }
     }
-    for m in &asked {
-        if !found.contains_key(*m) {
+    for m in first.missions.keys() {
+        if asked.contains(m) && !found.contains_key(m) {
             set.problems.push(format!(
                 "mission `{m}` has no result ({m}.json is missing): re-run the run with --skip-existing"
             ));

@@ -110,6 +110,19 @@ pub fn compare_offset_methods(config: &EvalConfig, spatial_range_s: f64) -> Resu
         .first()
         .ok_or_else(|| Error::InvalidArgument("give an estimate".into()))?
         .trajectory;
+    // Every method needs a few samples on each side; fewer are refused by name, not measured.
+    for (what, t) in [
+        (&inputs.reference.label, reference),
+        (&inputs.estimates[0].label, estimate),
+    ] {
+        if t.len() < 3 {
+            return Err(Error::TooFewSamples {
+                what: what.clone(),
+                n: t.len(),
+                need: 3,
+            });
+        }
+    }
     let t0 = reference.stamps_ns.first().copied().unwrap_or(0);
     let (ref_t, est_t) = (reference.times_s(t0), estimate.times_s(t0));
     let auto = config.measure(&ref_t, &reference.positions);

@@ -3,10 +3,13 @@
 
 mod common;
 mod hostile_support;
+mod robust_support;
 
 mod acceptance;
 mod annotate;
 mod batch;
+mod batch_integrity;
+mod bounds;
 mod cli;
 mod clock_consumers;
 mod conformance;
@@ -21,6 +24,8 @@ mod lever_fit;
 mod man;
 mod mcap_source;
 mod missions;
+mod names;
+mod outputs;
 mod parameters;
 mod pictures;
 mod presets;

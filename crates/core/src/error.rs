@@ -304,6 +304,29 @@ pub fn io_hint(e: &std::io::Error) -> &'static str {
         K::StorageFull => "free some disk space",
         K::InvalidData => "its content is not what was expected (not UTF-8 text?): check that it is the file you meant",
         K::AlreadyExists => "a file of that name appeared meanwhile: try again",
+        K::TimedOut => "start the program that writes into it first, or pass a regular file",
         _ => "check that the file is readable and the disk is healthy",
+    }
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_common_cause_has_its_own_advice() {
+        let generic = io_hint(&std::io::Error::other("x"));
+        for (code, says) in [
+            (libc::ENAMETOOLONG, "longer than the file system allows"),
+            (libc::EROFS, "read-only"),
+            (libc::EBUSY, "busy"),
+            (libc::ENOTDIR, "not a folder"),
+            (libc::ENOSPC, "disk is full"),
+            (libc::EDQUOT, "quota"),
+        ] {
+            let hint = io_hint(&std::io::Error::from_raw_os_error(code));
+            assert!(hint.contains(says), "{code}: {hint}");
+            assert_ne!(hint, generic);
+        }
     }
 }

@@ -56,17 +56,16 @@ pub fn run(a: OffsetArgs) -> Result<u8> {
     }
     let methods: Vec<&OffsetRow> = rows.iter().filter(|r| r.method != "none").collect();
     if methods.iter().all(|r| r.offset_s.is_none()) {
+        let first = methods
+            .iter()
+            .find_map(|r| {
+                r.error
+                    .as_deref()
+                    .map(|e| format!("{}: {}", r.method, escape(e)))
+            })
+            .unwrap_or_default();
         return Err(trajdrift::Error::Metric(format!(
-            "every offset method failed ({}); check the inputs overlap in time and move",
-            methods
-                .iter()
-                .map(|r| format!(
-                    "{}: {}",
-                    r.method,
-                    r.error.as_deref().map_or("failed".into(), escape)
-                ))
-                .collect::<Vec<_>>()
-                .join("; ")
+            "every offset method failed (each one's reason is in its row; {first})"
         ))
         .into());
     }

@@ -79,7 +79,16 @@ pub fn require_seekable(path: &Path, what: &str) -> Result<()> {
 /// either way every line is bounded by [`MAX_LINE_BYTES`].
 pub fn open_text(path: &Path) -> Result<TextReader> {
     let inner = if is_stream(path) {
-        Inner::Spooled(spooled(path)?, 0)
+        let s = spooled(path, MAX_STREAM_BYTES, true)?;
+        if s.len > MAX_STREAM_BYTES {
+            return Err(Error::InvalidArgument(format!(
+                "{}: {} gave more than {}; save the data to a file and pass the file",
+                path.display(),
+                stream_kind(path),
+                human(MAX_STREAM_BYTES)
+            )));
+        }
+        Inner::Spooled(s, 0)
     } else {
         Inner::File(File::open(path).map_err(|e| Error::io(path, e))?)
     };
@@ -147,7 +156,7 @@ pub fn read_bounded(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>> {
         ))
     };
     if is_stream(path) {
-        let s = spooled(path)?;
+        let s = spooled(path, limit, false)?;
         if s.len > limit {
             return Err(too_big());
         }
@@ -166,11 +175,16 @@ pub fn read_bounded(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>> {
         return Ok(v);
     }
     let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    if file.metadata().is_ok_and(|m| m.is_dir()) {
-        return Err(Error::io(
-            path,
-            std::io::Error::from(std::io::ErrorKind::IsADirectory),
-        ));
+    match file.metadata() {
+        Ok(m) if m.is_dir() => {
+            return Err(Error::io(
+                path,
+                std::io::Error::from(std::io::ErrorKind::IsADirectory),
+            ))
+        }
+        // Refused by its size, before a byte is read.
+        Ok(m) if m.len() > limit => return Err(too_big()),
+        _ => {}
     }
     let mut v = Vec::new();
     file.take(limit + 1)
@@ -237,12 +251,12 @@ fn spools() -> &'static Mutex<HashMap<PathBuf, Arc<Spool>>> {
 }
 
 /// The copy of the stream at `path`, read now if it was not yet.
-fn spooled(path: &Path) -> Result<Arc<Spool>> {
+fn spooled(path: &Path, limit: u64, text: bool) -> Result<Arc<Spool>> {
     let mut map = spools().lock().unwrap_or_else(|p| p.into_inner());
     if let Some(s) = map.get(path) {
         return Ok(s.clone());
     }
-    let s = Arc::new(spool(path)?);
+    let s = Arc::new(spool(path, limit, text)?);
     map.insert(path.to_path_buf(), s.clone());
     Ok(s)
 }
@@ -269,7 +283,10 @@ fn anonymous_file() -> std::io::Result<File> {
     Err(std::io::Error::from(std::io::ErrorKind::AlreadyExists))
 }
 
-fn spool(path: &Path) -> Result<Spool> {
+/// Reads the stream into its copy, stopping after `limit + 1` bytes (the caller says what is too
+/// much); `text`: a line longer than [`MAX_LINE_BYTES`] ends the read with an error (an endless
+/// stream without newlines, `/dev/zero`, is not copied to the disk).
+fn spool(path: &Path, limit: u64, text: bool) -> Result<Spool> {
     use std::io::Write;
     let mut source = open_stream(path)?;
     let mut file = anonymous_file().map_err(|e| {
@@ -283,20 +300,38 @@ fn spool(path: &Path) -> Result<Spool> {
     })?;
     let mut buf = vec![0u8; 1 << 16];
     let mut len = 0u64;
-    loop {
-        let n = source.read(&mut buf).map_err(|e| Error::io(path, e))?;
+    let (mut line, mut line_number) = (0usize, 1usize);
+    while len <= limit {
+        let want = buf.len().min((limit + 1 - len) as usize);
+        let n = source
+            .read(&mut buf[..want])
+            .map_err(|e| Error::io(path, e))?;
         if n == 0 {
             break;
         }
-        len += n as u64;
-        if len > MAX_STREAM_BYTES {
-            return Err(Error::InvalidArgument(format!(
-                "{}: {} gave more than {}; save the data to a file and pass the file",
-                path.display(),
-                stream_kind(path),
-                human(MAX_STREAM_BYTES)
-            )));
+        if text {
+            for &b in &buf[..n] {
+                if b == b'\n' {
+                    line = 0;
+                    line_number += 1;
+                } else {
+                    line += 1;
+                }
+            }
+            if line > MAX_LINE_BYTES {
+                return Err(Error::io(
+                    path,
+                    std::io::Error::new(
+                        std::io::ErrorKind::InvalidData,
+                        format!(
+                            "line {line_number} is longer than {} MiB: not a text trajectory (a binary file?)",
+                            MAX_LINE_BYTES >> 20
+                        ),
+                    ),
+                ));
+            }
         }
+        len += n as u64;
         file.write_all(&buf[..n])
             .map_err(|e| Error::io(std::env::temp_dir(), e))?;
     }
@@ -355,7 +390,7 @@ impl Read for Fifo {
                         return Err(std::io::Error::new(
                             std::io::ErrorKind::TimedOut,
                             format!(
-                                "nothing was written into the FIFO {} within {} s (no writer?); start its writer first, or pass a regular file",
+                                "nothing was written into the FIFO {} within {} s (no writer?)",
                                 self.path.display(),
                                 NO_WRITER_WAIT.as_secs()
                             ),

@@ -242,6 +242,22 @@ pub fn interpolate(p: &Poses, at: &[f64]) -> Poses {
     let n = s.len();
     let mut positions = Vec::with_capacity(at.len());
     let mut rotations = p.rotations.as_ref().map(|_| Vec::with_capacity(at.len()));
+    if n < 2 || p.positions.len() < n {
+        // No span to interpolate in: every stamp is clamped to the one pose (none: no pose at all).
+        if n == 1 && !p.positions.is_empty() {
+            for _ in at {
+                positions.push(p.positions[0]);
+                if let Some(o) = rotations.as_mut() {
+                    o.push(p.rotation(0));
+                }
+            }
+        }
+        return Poses {
+            stamps_s: Some(at.iter().take(positions.len()).copied().collect()),
+            positions,
+            rotations: rotations.map(Rotations::Matrices),
+        };
+    }
     for &t in at {
         let i = s
             .partition_point(|&x| x < t)
@@ -271,6 +287,23 @@ pub fn interpolate(p: &Poses, at: &[f64]) -> Poses {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn interpolating_one_pose_or_none_does_not_panic() {
+        let one = Poses {
+            stamps_s: Some(vec![1.0]),
+            positions: vec![nalgebra::Vector3::new(1.0, 2.0, 3.0)],
+            rotations: None,
+        };
+        let p = interpolate(&one, &[0.5, 1.0, 2.0]);
+        assert_eq!(p.positions.len(), 3);
+        let none = Poses {
+            stamps_s: Some(vec![]),
+            positions: vec![],
+            rotations: None,
+        };
+        assert!(interpolate(&none, &[0.5]).positions.is_empty());
+    }
 
     #[test]
     fn nearest_within_max_diff_without_uniqueness() {
