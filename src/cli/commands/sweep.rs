@@ -93,7 +93,7 @@ pub fn run(a: SweepArgs) -> Result<u8> {
             "warning: {} = {}: {}",
             param.as_str(),
             r.value,
-            r.error.as_deref().unwrap_or("")
+            trajdrift::report::escape::escape(r.error.as_deref().unwrap_or(""))
         );
     }
     Ok(if sweep.rows.iter().any(|r| r.error.is_some()) {
