@@ -66,7 +66,7 @@ pub fn validate(a: &MetricArgs) -> trajdrift::Result<()> {
     }
     for (flag, v) in [("--t_start", a.t_start), ("--t_end", a.t_end)] {
         if let Some(v) = v {
-            in_range(flag, v, Inclusive(-1.0e10), Inclusive(1.0e10), "s")?;
+            in_range(flag, v, Inclusive(-1.0e15), Inclusive(1.0e15), "s")?;
         }
     }
     if a.n_to_align == Some(0) {
