@@ -18,6 +18,7 @@ pub mod batch;
 pub mod cli;
 pub mod eval;
 pub mod evo;
+pub mod job;
 pub mod plot;
 pub mod render;
 pub mod standard;

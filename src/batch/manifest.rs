@@ -238,25 +238,18 @@ fn mission_config(
     layers: &[&Parameters],
     naming: Naming,
 ) -> Result<EvalConfig> {
-    let (mut config, preset_parameters) = match preset {
-        Some((spec, base)) => {
-            let p = Preset::load_from(spec, base)?;
-            let s = p.select_in(std::slice::from_ref(&recording), reference, estimates)?;
-            let c = EvalConfig::new(Some(recording), s.reference, s.estimates);
-            (c, p.parameters)
-        }
-        None => {
-            let reference = reference.ok_or_else(|| {
-                Error::InvalidArgument(
-                    "give a reference (reference = \"TOPIC\" or --reference) or a preset".into(),
-                )
-            })?;
-            let c = EvalConfig::new(Some(recording), reference, estimates);
-            (c, Parameters::default())
-        }
-    };
-    config.params =
-        Parameters::layered(std::iter::once(&preset_parameters).chain(layers.iter().copied()));
+    let preset = preset
+        .map(|(spec, base)| Preset::load_from(spec, base))
+        .transpose()?;
+    let recordings = [recording];
+    let config = crate::eval::roles::resolve(
+        &recordings,
+        reference,
+        estimates,
+        preset.as_ref(),
+        "give a reference (reference = \"TOPIC\" or --reference) or a preset",
+    )?
+    .config(&recordings, layers);
     // Every value is checked now, not when the mission runs: a manifest's mistake is a usage error
     // before any mission starts, naming the key (a combination of layers, e.g. t_start after t_end).
     if naming == Naming::Keys {

@@ -3,7 +3,6 @@
 //! failing mission is recorded with its error and the others go on. Results do not depend on `--jobs`:
 //! every mission is computed alone and the summary is built in name order.
 
-use crate::plot::Trajectories;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -13,9 +12,8 @@ use super::identity::{BatchLock, Fingerprint, RunRecord, RunStatus};
 use super::manifest::{Manifest, MissionSpec};
 use super::shard::Shard;
 use super::summary::{MissionResult, Summary, Timing, MISSION_KIND};
-use crate::annotate::annotate;
 use crate::error::{Error, Result};
-use crate::eval::evaluate_with_inputs;
+use crate::job::{self, JobEvent, JobOutputs, Pass};
 use crate::output::{write_json, OutputGuard};
 
 /// How to run a batch.
@@ -304,43 +302,22 @@ fn run_mission(
         bytes: size * passes,
     });
     let mcap_name = format!("{}.mcap", m.name);
-    let outcome = (|| -> Result<_> {
-        // The annotated recording's aligned poses carry the estimate's orientation.
-        let config = crate::eval::config::EvalConfig {
-            keep_orientations: opts.annotate,
-            ..m.config.clone()
-        };
-        let (report, inputs) = evaluate_with_inputs(&config, &|b| {
+    let outputs = JobOutputs {
+        annotate: opts.annotate.then(|| opts.out_dir.join(&mcap_name)),
+        force: opts.force,
+        pictures: opts.pictures.outputs(&opts.out_dir, &m.name),
+    };
+    let outcome = job::run(&m.config, &outputs, &|event| {
+        if let JobEvent::Read { pass, bytes } = event {
+            // The annotation pass reads the recording a second time: its bytes come after the first's.
+            let before = if pass == Pass::Annotate { size } else { 0 };
             progress(BatchEvent::Read {
                 mission: &m.name,
-                bytes: b,
+                bytes: before + bytes,
             })
-        })?;
-        let estimates = inputs.named_estimates();
-        let trajectories = Trajectories {
-            reference: &inputs.reference.trajectory,
-            estimates: &estimates,
-        };
-        opts.pictures
-            .outputs(&opts.out_dir, &m.name)
-            .write(&report, trajectories)?;
-        if opts.annotate {
-            annotate(
-                &m.config,
-                &report,
-                &inputs,
-                &opts.out_dir.join(&mcap_name),
-                opts.force,
-                &|b| {
-                    progress(BatchEvent::Read {
-                        mission: &m.name,
-                        bytes: size + b,
-                    })
-                },
-            )?;
         }
-        Ok(report)
-    })();
+    })
+    .map(|done| done.report);
     progress(BatchEvent::Finished {
         mission: &m.name,
         ok: outcome.is_ok(),

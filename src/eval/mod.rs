@@ -8,6 +8,7 @@ pub mod inputs;
 pub mod layer_check;
 pub mod parameters;
 pub mod preset;
+pub mod roles;
 pub mod sweep;
 
 use rayon::prelude::*;

@@ -1,14 +1,15 @@
 //! `trajdrift eval`: time offset and Drift Error of one or more estimates against a reference.
 
-use anyhow::{anyhow, Result};
+use std::sync::Mutex;
 
-use trajdrift::annotate::annotate;
+use anyhow::Result;
+
 use trajdrift::eval::config::{EvalConfig, LeverSpec, NamedInput};
-use trajdrift::eval::evaluate_with_inputs;
-use trajdrift::eval::parameters::Parameters;
 use trajdrift::eval::preset::Preset;
+use trajdrift::eval::roles;
+use trajdrift::job::{self, JobEvent, JobOutputs};
 use trajdrift::output::{is_stdout, write_json, OutputGuard};
-use trajdrift::plot::{PictureOutputs, PlotFormat, Trajectories};
+use trajdrift::plot::{PictureOutputs, PlotFormat};
 use trajdrift::render::table;
 
 use crate::cli::args::{text_options, EvalArgs, PlotFormatArg};
@@ -18,11 +19,6 @@ use crate::cli::{EXIT_OK, EXIT_WARNING};
 /// Builds the library's request from the flags, and the notes to print (a preset's estimates absent
 /// from the recording).
 pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
-    let reference = match (&a.reference, &a.reference_file) {
-        (Some(t), _) => Some(NamedInput::topic(t)),
-        (None, Some(f)) => Some(NamedInput::file(&f.to_string_lossy())),
-        (None, None) => None,
-    };
     let estimates: Vec<NamedInput> = a
         .estimate
         .iter()
@@ -30,25 +26,15 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
         .chain(a.estimate_file.iter().map(|s| NamedInput::file(s)))
         .collect();
     let preset = a.preset.as_deref().map(Preset::load).transpose()?;
-    let mut notes = Vec::new();
-    let (reference, estimates) = match &preset {
-        Some(p) => {
-            let s = p.select_in(&a.recording, reference, estimates)?;
-            notes.extend(s.skipped.iter().map(|n| {
-                format!(
-                    "preset {}: estimate {n} is not in the recording, skipped",
-                    p.name
-                )
-            }));
-            (s.reference, s.estimates)
-        }
-        None => (
-            reference.ok_or_else(|| anyhow!("give --reference TOPIC or --reference-file FILE"))?,
-            estimates,
-        ),
-    };
-    let mut c = EvalConfig::new(a.recording.first().cloned(), reference, estimates);
-    c.more_recordings = a.recording.iter().skip(1).cloned().collect();
+    let roles = roles::resolve(
+        &a.recording,
+        roles::named_reference(a.reference.as_deref(), a.reference_file.as_deref()),
+        estimates,
+        preset.as_ref(),
+        "give --reference TOPIC or --reference-file FILE",
+    )?;
+    let notes = roles.notes.clone();
+    let mut c = roles.config(&a.recording, &[&a.params.0]);
     c.export_aligned = a.export_aligned.clone();
     c.text = text_options(&a.text)?;
     c.reference_lever = a
@@ -68,8 +54,6 @@ pub fn config_from_args(a: &EvalArgs) -> Result<(EvalConfig, Vec<String>)> {
             LeverSpec::parse("--estimate-lever", l).map(|l| (name, l))
         })
         .collect::<trajdrift::Result<_>>()?;
-    let preset_parameters = preset.map(|p| p.parameters).unwrap_or_default();
-    c.params = Parameters::layered([&preset_parameters, &a.params.0]);
     Ok((c, notes))
 }
 
@@ -114,55 +98,54 @@ pub fn claim_outputs(
 
 /// Runs the command; returns the exit code.
 pub fn run(a: EvalArgs) -> Result<u8> {
-    let (mut config, notes) = config_from_args(&a)?;
-    // The annotated recording's aligned poses carry the estimate's orientation.
-    config.keep_orientations = a.annotate.is_some();
+    let (config, notes) = config_from_args(&a)?;
     if !a.quiet {
         for n in &notes {
             eprintln!("note: {}", trajdrift::report::escape::escape(n));
         }
     }
-    let pictures = pictures_from_args(&a);
-    let guard = claim_outputs(&a, &config, &pictures)?;
-    if let Some(out) = &a.annotate {
-        // Refuse before the evaluation pass rather than after it.
-        trajdrift::annotate::check_annotate(&config, out, a.force)?;
-    }
+    let outputs = JobOutputs {
+        annotate: a.annotate.clone(),
+        force: a.force,
+        pictures: pictures_from_args(&a),
+    };
+    let guard = claim_outputs(&a, &config, &outputs.pictures)?;
+    // Refuse before the evaluation pass rather than after it.
+    job::check(&config, &outputs)?;
     let total: u64 = config
         .recordings()
         .iter()
         .map(|p| trajdrift::sources::open::input_size(p))
         .sum();
-    let progress = ReadProgress::new(total, a.quiet);
-    let result = evaluate_with_inputs(&config, &|b| progress.update(b));
-    progress.finish();
-    let (report, inputs) = result?;
-    if let Some(out) = &a.annotate {
-        let progress = ReadProgress::new(total, a.quiet);
-        let done = annotate(&config, &report, &inputs, out, a.force, &|b| {
-            progress.update(b)
-        });
-        progress.finish();
-        let done = done?;
-        if !a.quiet {
-            eprintln!(
-                "wrote {} ({} input messages copied, {} added)",
-                done.path.display(),
-                done.copy.messages,
-                done.counts.values().sum::<u64>()
-            );
+    // One progress bar per pass over the recording, shown while that pass runs.
+    let bar: Mutex<Option<ReadProgress>> = Mutex::new(None);
+    let done = job::run(&config, &outputs, &|event| {
+        let mut bar = bar.lock().unwrap_or_else(|e| e.into_inner());
+        match event {
+            JobEvent::Read { bytes, .. } => bar
+                .get_or_insert_with(|| ReadProgress::new(total, a.quiet))
+                .update(bytes),
+            JobEvent::PassDone(_) => {
+                if let Some(b) = bar.take() {
+                    b.finish();
+                }
+            }
         }
+    })?;
+    if let (Some(annotated), false) = (&done.annotated, a.quiet) {
+        eprintln!(
+            "wrote {} ({} input messages copied, {} added)",
+            annotated.path.display(),
+            annotated.copy.messages,
+            annotated.counts.values().sum::<u64>()
+        );
     }
-    let estimates = inputs.named_estimates();
-    let trajectories = Trajectories {
-        reference: &inputs.reference.trajectory,
-        estimates: &estimates,
-    };
-    for path in pictures.write(&report, trajectories)? {
-        if !a.quiet {
+    if !a.quiet {
+        for path in &done.pictures {
             eprintln!("wrote {}", path.display());
         }
     }
+    let report = done.report;
     let json_to_stdout = a.json.as_deref().is_some_and(is_stdout);
     if let Some(path) = &a.json {
         guard.check("--json", path)?;

@@ -6,6 +6,7 @@ use anyhow::Result;
 use trajdrift::clock::ClockCorrection;
 use trajdrift::eval::config::{EvalConfig, NamedInput};
 use trajdrift::eval::preset::Preset;
+use trajdrift::eval::roles;
 use trajdrift::evo::metric_result::{
     change_unit, evo_result, evo_title, figures, FigureOptions, ValueAxes,
 };
@@ -89,11 +90,6 @@ pub fn inputs(a: &MetricArgs) -> Result<MetricInputs> {
         ))
         .into());
     }
-    let reference = match (&a.reference, &a.reference_file) {
-        (Some(t), _) => Some(NamedInput::topic(t)),
-        (None, Some(f)) => Some(NamedInput::file(&f.to_string_lossy())),
-        _ => None,
-    };
     let estimates: Vec<NamedInput> = match (&a.estimate, &a.estimate_file) {
         (Some(t), _) => vec![NamedInput::topic(t)],
         (None, Some(f)) => vec![NamedInput::file(&f.to_string_lossy())],
@@ -105,27 +101,22 @@ pub fn inputs(a: &MetricArgs) -> Result<MetricInputs> {
         .map(std::path::PathBuf::from)
         .into_iter()
         .collect();
-    let (reference, estimates) = match a.preset.as_deref().map(Preset::load).transpose()? {
-        Some(p) => {
-            let s = p.select_in(recording.as_slice(), reference, estimates)?;
-            (s.reference, s.estimates)
-        }
-        None => (
-            reference.ok_or_else(|| {
-                trajdrift::Error::InvalidArgument(
-                    "give evo's form (tum REF EST, kitti REF EST, euroc GT EST, bag|bag2|mcap REC REF EST) or --reference/--reference-file".into(),
-                )
-            })?,
-            estimates,
-        ),
-    };
+    let preset = a.preset.as_deref().map(Preset::load).transpose()?;
+    let roles = roles::resolve(
+        &recording,
+        roles::named_reference(a.reference.as_deref(), a.reference_file.as_deref()),
+        estimates,
+        preset.as_ref(),
+        "give evo's form (tum REF EST, kitti REF EST, euroc GT EST, bag|bag2|mcap REC REF EST) or --reference/--reference-file",
+    )?;
+    let estimates = roles.estimates.clone();
     if estimates.is_empty() {
         return Err(trajdrift::Error::InvalidArgument(
             "give an estimate: --estimate TOPIC or --estimate-file FILE".into(),
         )
         .into());
     }
-    let mut c = EvalConfig::new(recording.first().cloned(), reference, estimates);
+    let mut c = EvalConfig::new(recording.first().cloned(), roles.reference, estimates);
     c.params.stamp = Some(a.stamp);
     c.text = text_options(&a.text)?;
     Ok(MetricInputs::Eval(Box::new(c)))
