@@ -216,116 +216,35 @@ pub fn time_offset(a: &MetricArgs, inputs: &MetricInputs) -> Result<ResolvedOffs
 /// as JSON); writes evo's result file and figures when asked.
 pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
     let log = EvoLog::new(&evo.usability, &(a, evo));
-    for note in ignored_notes(&[
-        (
-            "--rerun",
-            evo.rerun,
-            "there is no Rerun viewer; -p writes the figures as files",
-        ),
-        (
-            "--rerun_rec_id",
-            evo.rerun_rec_id.is_some(),
-            "there is no Rerun viewer",
-        ),
-        (
-            "--ros_map_yaml",
-            evo.ros_map_yaml.is_some(),
-            "ROS map images are not drawn",
-        ),
-        (
-            "--map_tile",
-            evo.map_tile.is_some(),
-            "map tiles are not drawn (no network)",
-        ),
-    ]) {
-        log.warn(&note);
-    }
+    note_ignored(&log, evo);
     validate(a)?;
     let relation = PoseRelation::parse(&a.pose_relation)?;
     let inputs = inputs(a)?;
-    // Every output claimed before any work: never an input, never two outputs on one path.
-    let mut guard = OutputGuard::new(input_paths(a));
-    for (flag, out) in [
-        ("--json", a.json.as_deref()),
-        ("--save_results", evo.save_results.as_deref()),
-        ("--logfile", evo.usability.logfile.as_deref()),
-    ] {
-        if let Some(out) = out {
-            guard.claim(flag, out)?;
-        }
-    }
+    let guard = claim_outputs(a, evo)?;
     let resolved = time_offset(a, &inputs)?;
-    let (offset, weak) = (resolved.constant_s, resolved.weak);
-    let pipeline = pipeline(a, offset);
+    let pipeline = pipeline(a, resolved.constant_s);
     let orientation =
         trajdrift::metrics::standard::needs_orientation(metric, relation, pipeline.alignment)
             || evo.motion_filter.is_some();
+    let mut pair = inputs.load_with(&|_| {}, orientation)?;
+    if let Some(model) = &resolved.model {
+        pair.estimate = model.apply_to_poses(pair.estimate);
+    }
+    refuse_single_poses(&pair)?;
+    log.detail(&format!(
+        "reference {}: {} poses; estimate {}: {} poses",
+        pair.reference_label,
+        pair.reference.len(),
+        pair.estimate_label,
+        pair.estimate.len()
+    ));
+    filter_poses(&mut pair, evo, &log)?;
     let LoadedPair {
-        mut reference,
-        mut estimate,
+        reference,
+        estimate,
         reference_label,
         estimate_label,
-    } = inputs.load_with(&|_| {}, orientation)?;
-    if let Some(model) = &resolved.model {
-        estimate = model.apply_to_poses(estimate);
-    }
-    // One pose (or one stamp, written again) is no trajectory: refused by name rather than measured.
-    for (label, poses) in [(&reference_label, &reference), (&estimate_label, &estimate)] {
-        let distinct = match &poses.stamps_s {
-            Some(t) => {
-                let mut t: Vec<u64> = t.iter().map(|x| x.to_bits()).collect();
-                t.sort_unstable();
-                t.dedup();
-                t.len()
-            }
-            None => poses.len(),
-        };
-        if distinct < 2 {
-            return Err(trajdrift::Error::TooFewSamples {
-                what: format!("{} (distinct stamps)", escape(label)),
-                n: distinct,
-                need: 2,
-            }
-            .into());
-        }
-    }
-    log.detail(&format!(
-        "reference {reference_label}: {} poses; estimate {estimate_label}: {} poses",
-        reference.len(),
-        estimate.len()
-    ));
-    if let Some(n) = evo.downsample {
-        let (ir, ie) = (
-            downsample_ids(reference.len(), n),
-            downsample_ids(estimate.len(), n),
-        );
-        reference = reference.select(&ir);
-        estimate = estimate.select(&ie);
-        log.detail(&format!(
-            "downsampled to at most {n} poses: {} and {}",
-            reference.len(),
-            estimate.len()
-        ));
-    }
-    if let Some(m) = &evo.motion_filter {
-        if reference.stamps_s.is_none() || estimate.stamps_s.is_none() {
-            return Err(trajdrift::Error::Metric(
-                "--motion_filter: trajectories without stamps (KITTI) can't be motion filtered: it would break the pairing by index".into(),
-            )
-            .into());
-        }
-        let (ir, ie) = (
-            motion_filter_ids(&reference, m[0], m[1])?,
-            motion_filter_ids(&estimate, m[0], m[1])?,
-        );
-        reference = reference.select(&ir);
-        estimate = estimate.select(&ie);
-        log.detail(&format!(
-            "motion filter: {} and {} poses kept",
-            reference.len(),
-            estimate.len()
-        ));
-    }
+    } = pair;
     let plots = evo.plot || evo.save_plot.is_some();
     let full_reference = (plots && evo.plot_full_ref).then(|| {
         reference
@@ -362,57 +281,216 @@ pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
     if !to_stdout {
         log.result(&render(&result, relation, &pipeline))?;
     }
-    let (ref_name, est_name) = names(a, &reference_label, &estimate_label);
-    let mut code = if weak { EXIT_WARNING } else { EXIT_OK };
+    let mut code = if resolved.weak { EXIT_WARNING } else { EXIT_OK };
     if let Some(e) = &evaluated {
-        let axes = ValueAxes::of(e);
-        if let Some(path) = &evo.save_results {
-            let zip =
-                evo_result(&result, relation, &pipeline, &axes, &ref_name, &est_name).to_zip()?;
-            replace_note(&log, evo, path);
-            guard.write("--save_results", path, &zip)?;
-            log.detail(&format!("results written to {}", path.display()));
+        let names = names(a, &reference_label, &estimate_label);
+        let written = EvoOutputs {
+            result: &result,
+            relation,
+            pipeline: &pipeline,
+            axes: &ValueAxes::of(e),
+            names: (&names.0, &names.1),
+            full_reference,
         }
-        if plots {
-            let options = FigureOptions {
-                mode: PlotMode::parse(&evo.plot_mode)?,
-                x_dimension: evo.plot_x_dimension.clone(),
-                colormap_min: evo.plot_colormap_min,
-                colormap_max: evo.plot_colormap_max,
-                colormap_max_percentile: evo.plot_colormap_max_percentile,
-                full_reference,
-            };
-            let title = evo_title(&result, relation, &pipeline);
-            let short = std::path::Path::new(&est_name)
-                .file_name()
-                .map_or(est_name.clone(), |n| n.to_string_lossy().into_owned());
-            let figures = figures(&result, &title, &axes, &short, &options);
-            let default_base = evo.save_results.as_ref().map_or_else(
-                || {
-                    std::path::PathBuf::from(format!(
-                        "{}_{}",
-                        result.metric,
-                        trajdrift::plot::file_stem(&short)
-                    ))
-                },
-                |r| r.with_extension(""),
-            );
-            if write_figures(
-                &log,
-                &guard,
-                evo.save_plot.as_deref(),
-                &default_base,
-                &figures,
-            )? {
-                code = code.max(EXIT_WARNING);
-            }
+        .write(evo, &log, &guard)?;
+        if written {
+            code = code.max(EXIT_WARNING);
         }
     }
-    if weak {
+    if resolved.weak {
         log.warn("warning [weak_time_offset]: the automatic time offset is not confident; none was applied");
     }
     log.finish(&guard)?;
     Ok(code)
+}
+
+/// Names once on stderr the evo flags that have no meaning here (accepted, never a usage error).
+fn note_ignored(log: &EvoLog, evo: &EvoMetricArgs) {
+    for note in ignored_notes(&[
+        (
+            "--rerun",
+            evo.rerun,
+            "there is no Rerun viewer; -p writes the figures as files",
+        ),
+        (
+            "--rerun_rec_id",
+            evo.rerun_rec_id.is_some(),
+            "there is no Rerun viewer",
+        ),
+        (
+            "--ros_map_yaml",
+            evo.ros_map_yaml.is_some(),
+            "ROS map images are not drawn",
+        ),
+        (
+            "--map_tile",
+            evo.map_tile.is_some(),
+            "map tiles are not drawn (no network)",
+        ),
+    ]) {
+        log.warn(&note);
+    }
+}
+
+/// Every output claimed before any work: never an input, never two outputs on one path.
+fn claim_outputs(a: &MetricArgs, evo: &EvoMetricArgs) -> Result<OutputGuard> {
+    let mut guard = OutputGuard::new(input_paths(a));
+    for (flag, out) in [
+        ("--json", a.json.as_deref()),
+        ("--save_results", evo.save_results.as_deref()),
+        ("--logfile", evo.usability.logfile.as_deref()),
+    ] {
+        if let Some(out) = out {
+            guard.claim(flag, out)?;
+        }
+    }
+    Ok(guard)
+}
+
+/// One pose (or one stamp, written again) is no trajectory: refused by name rather than measured.
+fn refuse_single_poses(pair: &LoadedPair) -> Result<()> {
+    for (label, poses) in [
+        (&pair.reference_label, &pair.reference),
+        (&pair.estimate_label, &pair.estimate),
+    ] {
+        let distinct = match &poses.stamps_s {
+            Some(t) => {
+                let mut t: Vec<u64> = t.iter().map(|x| x.to_bits()).collect();
+                t.sort_unstable();
+                t.dedup();
+                t.len()
+            }
+            None => poses.len(),
+        };
+        if distinct < 2 {
+            return Err(trajdrift::Error::TooFewSamples {
+                what: format!("{} (distinct stamps)", escape(label)),
+                n: distinct,
+                need: 2,
+            }
+            .into());
+        }
+    }
+    Ok(())
+}
+
+/// evo's `--downsample` and `--motion_filter`, on both trajectories, said in the log.
+fn filter_poses(pair: &mut LoadedPair, evo: &EvoMetricArgs, log: &EvoLog) -> Result<()> {
+    if let Some(n) = evo.downsample {
+        let (ir, ie) = (
+            downsample_ids(pair.reference.len(), n),
+            downsample_ids(pair.estimate.len(), n),
+        );
+        select_pair(pair, &ir, &ie);
+        log.detail(&format!(
+            "downsampled to at most {n} poses: {} and {}",
+            pair.reference.len(),
+            pair.estimate.len()
+        ));
+    }
+    if let Some(m) = &evo.motion_filter {
+        if pair.reference.stamps_s.is_none() || pair.estimate.stamps_s.is_none() {
+            return Err(trajdrift::Error::Metric(
+                "--motion_filter: trajectories without stamps (KITTI) can't be motion filtered: it would break the pairing by index".into(),
+            )
+            .into());
+        }
+        let (ir, ie) = (
+            motion_filter_ids(&pair.reference, m[0], m[1])?,
+            motion_filter_ids(&pair.estimate, m[0], m[1])?,
+        );
+        select_pair(pair, &ir, &ie);
+        log.detail(&format!(
+            "motion filter: {} and {} poses kept",
+            pair.reference.len(),
+            pair.estimate.len()
+        ));
+    }
+    Ok(())
+}
+
+/// Keeps the reference's poses at `ir` and the estimate's at `ie`.
+fn select_pair(pair: &mut LoadedPair, ir: &[u32], ie: &[u32]) {
+    let take = |p: &mut trajdrift::metrics::standard::Poses, ids: &[u32]| {
+        let all = std::mem::replace(
+            p,
+            trajdrift::metrics::standard::Poses {
+                stamps_s: None,
+                positions: Vec::new(),
+                rotations: None,
+            },
+        );
+        *p = all.select(ids);
+    };
+    take(&mut pair.reference, ir);
+    take(&mut pair.estimate, ie);
+}
+
+/// What `--save_results` and `-p`/`--save_plot` write, from one metric's result.
+struct EvoOutputs<'a> {
+    result: &'a MetricResult,
+    relation: PoseRelation,
+    pipeline: &'a Pipeline,
+    axes: &'a ValueAxes,
+    /// The reference's and the estimate's names, as evo writes them.
+    names: (&'a str, &'a str),
+    /// `--plot_full_ref`: the reference's positions before the association.
+    full_reference: Option<Vec<[f64; 3]>>,
+}
+
+impl EvoOutputs<'_> {
+    /// Writes the result zip and the figures asked for; true when a figure format had to change (a
+    /// warning the user must see).
+    fn write(self, evo: &EvoMetricArgs, log: &EvoLog, guard: &OutputGuard) -> Result<bool> {
+        let (ref_name, est_name) = self.names;
+        if let Some(path) = &evo.save_results {
+            let zip = evo_result(
+                self.result,
+                self.relation,
+                self.pipeline,
+                self.axes,
+                ref_name,
+                est_name,
+            )
+            .to_zip()?;
+            replace_note(log, evo, path);
+            guard.write("--save_results", path, &zip)?;
+            log.detail(&format!("results written to {}", path.display()));
+        }
+        if !(evo.plot || evo.save_plot.is_some()) {
+            return Ok(false);
+        }
+        let options = FigureOptions {
+            mode: PlotMode::parse(&evo.plot_mode)?,
+            x_dimension: evo.plot_x_dimension.clone(),
+            colormap_min: evo.plot_colormap_min,
+            colormap_max: evo.plot_colormap_max,
+            colormap_max_percentile: evo.plot_colormap_max_percentile,
+            full_reference: self.full_reference,
+        };
+        let title = evo_title(self.result, self.relation, self.pipeline);
+        let short = std::path::Path::new(est_name)
+            .file_name()
+            .map_or(est_name.to_string(), |n| n.to_string_lossy().into_owned());
+        let figures = figures(self.result, &title, self.axes, &short, &options);
+        let default_base = evo.save_results.as_ref().map_or_else(
+            || {
+                std::path::PathBuf::from(format!(
+                    "{}_{}",
+                    self.result.metric,
+                    trajdrift::plot::file_stem(&short)
+                ))
+            },
+            |r| r.with_extension(""),
+        );
+        write_figures(
+            log,
+            guard,
+            evo.save_plot.as_deref(),
+            &default_base,
+            &figures,
+        )
+    }
 }
 
 /// The files a metric reads: what an output must not overwrite.
