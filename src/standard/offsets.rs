@@ -16,16 +16,101 @@ use crate::metrics::standard::{
 };
 use crate::trajectory::Trajectory;
 
+/// A way of finding the offset, as `trajdrift offset` lists them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OffsetWay {
+    /// No offset (the baseline).
+    None,
+    /// The Δt minimising the APE after an SE(3) alignment (what an evo user does by hand).
+    Spatial,
+    Speed,
+    Curvature,
+    SignedCurvature,
+    /// eval's combination.
+    Auto,
+}
+
+impl OffsetWay {
+    /// As written in the table and the JSON.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            OffsetWay::None => "none",
+            OffsetWay::Spatial => "spatial",
+            OffsetWay::Speed => "speed",
+            OffsetWay::Curvature => "curvature",
+            OffsetWay::SignedCurvature => "signed-curvature",
+            OffsetWay::Auto => "auto",
+        }
+    }
+}
+
+impl std::fmt::Display for OffsetWay {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.as_str())
+    }
+}
+
+impl From<OffsetMethod> for OffsetWay {
+    fn from(m: OffsetMethod) -> Self {
+        match m {
+            OffsetMethod::Speed => OffsetWay::Speed,
+            OffsetMethod::Curvature => OffsetWay::Curvature,
+            OffsetMethod::SignedCurvature => OffsetWay::SignedCurvature,
+            OffsetMethod::Auto => OffsetWay::Auto,
+        }
+    }
+}
+
+/// How a way fared: a search's own status, `failed`, or `-` for `none` (nothing searched).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum RowStatus {
+    #[serde(rename = "ok")]
+    Ok,
+    #[serde(rename = "weak")]
+    Weak,
+    #[serde(rename = "failed")]
+    Failed,
+    #[serde(rename = "-")]
+    NotSearched,
+}
+
+impl RowStatus {
+    /// As written in the table and the JSON.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            RowStatus::Ok => "ok",
+            RowStatus::Weak => "weak",
+            RowStatus::Failed => "failed",
+            RowStatus::NotSearched => "-",
+        }
+    }
+}
+
+impl std::fmt::Display for RowStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.as_str())
+    }
+}
+
+impl From<OffsetStatus> for RowStatus {
+    fn from(s: OffsetStatus) -> Self {
+        match s {
+            OffsetStatus::Ok => RowStatus::Ok,
+            OffsetStatus::Weak => RowStatus::Weak,
+        }
+    }
+}
+
 /// One method's answer.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct OffsetRow {
-    pub method: String,
+    pub method: OffsetWay,
     /// Δt, seconds (t_est + Δt = reference clock); `None` when the method failed.
     pub offset_s: Option<f64>,
     /// The method's own quality: peak NCC for the correlation methods, the APE RMSE (m) for spatial.
     pub quality: Option<f64>,
-    /// `ok`, `weak`, `failed` or `-` (none).
-    pub status: String,
+    pub status: RowStatus,
     pub time_ms: f64,
     /// APE (SE(3), translation part) RMSE of the estimate shifted by Δt, m.
     pub ape_rmse_m: Option<f64>,
@@ -104,91 +189,88 @@ pub fn spatial_offset(
 /// Runs every method on the first estimate of `config`.
 pub fn compare_offset_methods(config: &EvalConfig, spatial_range_s: f64) -> Result<Vec<OffsetRow>> {
     let inputs = crate::eval::inputs::load(config, &|_| {})?;
-    let reference = &inputs.reference.trajectory;
-    let estimate = &inputs
-        .estimates
-        .first()
-        .ok_or_else(|| Error::InvalidArgument("give an estimate".into()))?
-        .trajectory;
-    // Every method needs a few samples on each side; fewer are refused by name, not measured.
-    for (what, t) in [
-        (&inputs.reference.label, reference),
-        (&inputs.estimates[0].label, estimate),
-    ] {
-        if t.len() < 3 {
-            return Err(Error::TooFewSamples {
-                what: what.clone(),
-                n: t.len(),
-                need: 3,
-            });
-        }
-    }
+    let (reference, estimate) = pair_of(&inputs)?;
     let t0 = reference.stamps_ns.first().copied().unwrap_or(0);
     let (ref_t, est_t) = (reference.times_s(t0), estimate.times_s(t0));
     let auto = config.measure(&ref_t, &reference.positions);
     let params = config.resolved(&auto).offset_params();
     let p = ape_pipeline(reference, estimate);
-    let row = |method: &str, found: Result<(f64, Option<f64>, String)>, ms: f64| match found {
-        Ok((dt, quality, status)) => OffsetRow {
-            method: method.into(),
-            offset_s: Some(dt),
-            quality,
-            status,
-            time_ms: ms,
-            ape_rmse_m: ape_rmse_at(reference, estimate, dt, &p),
-            error: None,
-        },
-        Err(e) => OffsetRow {
-            method: method.into(),
-            offset_s: None,
-            quality: None,
-            status: "failed".into(),
-            time_ms: ms,
-            ape_rmse_m: None,
-            error: Some(e.to_string()),
-        },
+    let row = |method: OffsetWay, found: Result<(f64, Option<f64>, RowStatus)>, start: Instant| {
+        let time_ms = start.elapsed().as_secs_f64() * 1e3;
+        match found {
+            Ok((dt, quality, status)) => OffsetRow {
+                method,
+                offset_s: Some(dt),
+                quality,
+                status,
+                time_ms,
+                ape_rmse_m: ape_rmse_at(reference, estimate, dt, &p),
+                error: None,
+            },
+            Err(e) => OffsetRow {
+                method,
+                offset_s: None,
+                quality: None,
+                status: RowStatus::Failed,
+                time_ms,
+                ape_rmse_m: None,
+                error: Some(e.to_string()),
+            },
+        }
     };
-    let status = |s: OffsetStatus| match s {
-        OffsetStatus::Ok => "ok".to_string(),
-        OffsetStatus::Weak => "weak".to_string(),
-    };
-    let mut rows = vec![row("none", Ok((0.0, None, "-".into())), 0.0)];
+    let mut rows = vec![OffsetRow {
+        time_ms: 0.0,
+        ..row(
+            OffsetWay::None,
+            Ok((0.0, None, RowStatus::NotSearched)),
+            Instant::now(),
+        )
+    }];
     let start = Instant::now();
     let spatial = spatial_offset(reference, estimate, spatial_range_s)
-        .map(|(dt, rmse)| (dt, Some(rmse), "ok".to_string()));
-    rows.push(row("spatial", spatial, start.elapsed().as_secs_f64() * 1e3));
+        .map(|(dt, rmse)| (dt, Some(rmse), RowStatus::Ok));
+    rows.push(row(OffsetWay::Spatial, spatial, start));
+    let (r, e) = (
+        (&ref_t[..], &reference.positions[..]),
+        (&est_t[..], &estimate.positions[..]),
+    );
     for m in [
         OffsetMethod::Speed,
         OffsetMethod::Curvature,
         OffsetMethod::SignedCurvature,
     ] {
         let start = Instant::now();
-        let r = estimate_time_offset(
-            m,
-            &ref_t,
-            &reference.positions,
-            &est_t,
-            &estimate.positions,
-            &params,
-        )
-        .map(|o| (o.offset_s, Some(o.correlation), status(o.status)));
-        rows.push(row(m.as_str(), r, start.elapsed().as_secs_f64() * 1e3));
+        let found = estimate_time_offset(m, r.0, r.1, e.0, e.1, &params)
+            .map(|o| (o.offset_s, Some(o.correlation), o.status.into()));
+        rows.push(row(m.into(), found, start));
     }
     let start = Instant::now();
-    let r = auto_time_offset(
-        &ref_t,
-        &reference.positions,
-        &est_t,
-        &estimate.positions,
-        &params,
-    )
-    .map(|a| {
+    let found = auto_time_offset(r.0, r.1, e.0, e.1, &params).map(|a| {
         (
             a.estimate.offset_s,
             Some(a.estimate.correlation),
-            status(a.estimate.status),
+            a.estimate.status.into(),
         )
     });
-    rows.push(row("auto", r, start.elapsed().as_secs_f64() * 1e3));
+    rows.push(row(OffsetWay::Auto, found, start));
     Ok(rows)
+}
+
+/// The reference and the first estimate; every method needs a few samples on each side, fewer are
+/// refused by name, not measured.
+fn pair_of(inputs: &crate::eval::inputs::Inputs) -> Result<(&Trajectory, &Trajectory)> {
+    let estimate = inputs
+        .estimates
+        .first()
+        .ok_or_else(|| Error::InvalidArgument("give an estimate".into()))?;
+    for t in [&inputs.reference, estimate] {
+        if t.trajectory.len() < 3 {
+            return Err(Error::TooFewSamples {
+                what: t.label.clone(),
+                n: t.trajectory.len(),
+                need: 3,
+            });
+        }
+    }
+    Ok((&inputs.reference.trajectory, &estimate.trajectory))
 }

@@ -3,7 +3,7 @@
 use anyhow::{anyhow, Result};
 
 use trajdrift::batch::manifest::{FolderRequest, Manifest};
-use trajdrift::batch::run::{run_batch, BatchOptions, MissionPictures};
+use trajdrift::batch::run::{run_batch, BatchOptions, BatchOutcome, MissionPictures};
 use trajdrift::batch::shard::Shard;
 
 use trajdrift::report::escape::escape;
@@ -14,7 +14,20 @@ use crate::cli::batch_progress::BatchBars;
 /// Runs the command; returns the exit code, as `eval`'s: 1 when a mission failed, else 3 when a mission
 /// finished with a warning (the summary says which), else 0.
 pub fn run(a: BatchArgs) -> Result<u8> {
-    let manifest = if a.input.is_dir() {
+    let manifest = manifest_from_args(&a)?;
+    let opts = options_from_args(&a)?;
+    let bars = BatchBars::new(a.quiet);
+    let outcome = run_batch(&manifest, &opts, &|e| bars.event(e));
+    bars.finish();
+    let outcome = outcome.map_err(|e| anyhow!(e))?;
+    report(&a, &outcome)?;
+    Ok(outcome.summary.exit_code())
+}
+
+/// The missions: a folder of recordings with `--reference`/`--estimate` or `--preset`, or a
+/// manifest (which names them per mission).
+fn manifest_from_args(a: &BatchArgs) -> Result<Manifest> {
+    if a.input.is_dir() {
         if a.reference.is_none() && a.preset.is_none() {
             return Err(trajdrift::Error::InvalidArgument(format!(
                 "{}: a folder needs --reference TOPIC and --estimate TOPIC, or --preset NAME",
@@ -35,16 +48,19 @@ pub fn run(a: BatchArgs) -> Result<u8> {
             preset: a.preset.clone(),
             parameters: a.params.0.clone(),
         };
-        Manifest::from_dir(&a.input, &request)?
-    } else {
-        if a.reference.is_some() || !a.estimate.is_empty() || a.preset.is_some() {
-            return Err(trajdrift::Error::InvalidArgument(
-                "--reference/--estimate/--preset are for a folder of recordings; a manifest names them per mission".into(),
-            )
-            .into());
-        }
-        Manifest::from_toml(&a.input, &a.params.0)?
-    };
+        return Ok(Manifest::from_dir(&a.input, &request)?);
+    }
+    if a.reference.is_some() || !a.estimate.is_empty() || a.preset.is_some() {
+        return Err(trajdrift::Error::InvalidArgument(
+            "--reference/--estimate/--preset are for a folder of recordings; a manifest names them per mission".into(),
+        )
+        .into());
+    }
+    Ok(Manifest::from_toml(&a.input, &a.params.0)?)
+}
+
+/// How to run: the output folder, jobs, shard, annotated recordings and pictures.
+fn options_from_args(a: &BatchArgs) -> Result<BatchOptions> {
     let shard = match a.shard.as_deref() {
         Some(spec) => Some(Shard::resolve(spec, a.shards, &|v| std::env::var(v).ok())?),
         None if a.shards.is_some() => {
@@ -55,7 +71,7 @@ pub fn run(a: BatchArgs) -> Result<u8> {
         }
         None => None,
     };
-    let opts = BatchOptions {
+    Ok(BatchOptions {
         out_dir: a.out.clone(),
         jobs: a.jobs.unwrap_or(0),
         annotate: a.annotate,
@@ -70,11 +86,11 @@ pub fn run(a: BatchArgs) -> Result<u8> {
             html: a.html,
         },
         inputs: vec![a.input.clone()],
-    };
-    let bars = BatchBars::new(a.quiet);
-    let outcome = run_batch(&manifest, &opts, &|e| bars.event(e));
-    bars.finish();
-    let outcome = outcome.map_err(|e| anyhow!(e))?;
+    })
+}
+
+/// Each failed mission and each warning on stderr; the summary table and one line on stdout.
+fn report(a: &BatchArgs, outcome: &BatchOutcome) -> Result<()> {
     let s = &outcome.summary;
     for f in &s.failed {
         eprintln!(
@@ -103,5 +119,5 @@ pub fn run(a: BatchArgs) -> Result<u8> {
             a.out.display()
         );
     }
-    Ok(s.exit_code())
+    Ok(())
 }

@@ -4,7 +4,7 @@ use anyhow::Result;
 
 use trajdrift::output::{is_stdout, write_json};
 use trajdrift::report::escape::escape;
-use trajdrift::standard::offsets::{compare_offset_methods, OffsetRow};
+use trajdrift::standard::offsets::{compare_offset_methods, OffsetRow, OffsetWay};
 
 use crate::cli::args::OffsetArgs;
 use crate::cli::EXIT_OK;
@@ -54,7 +54,10 @@ pub fn run(a: OffsetArgs) -> Result<u8> {
         }
         println!("quality: peak NCC for speed/curvature/signed-curvature/auto, the APE rmse (m) for spatial");
     }
-    let methods: Vec<&OffsetRow> = rows.iter().filter(|r| r.method != "none").collect();
+    let methods: Vec<&OffsetRow> = rows
+        .iter()
+        .filter(|r| r.method != OffsetWay::None)
+        .collect();
     if methods.iter().all(|r| r.offset_s.is_none()) {
         let first = methods
             .iter()
