@@ -208,7 +208,7 @@ impl RowReader<'_> {
     }
 
     /// Parses one line: 4 values (`t x y z`) or 8 (with `qx qy qz qw`); comments and blank lines
-    /// skipped. Scanning the fields ([`RowReader::fields`]) and storing them ([`RowReader::store`])
+    /// skipped. Scanning the fields ([`RowReader::scan`]) and storing them ([`RowReader::store`])
     /// are apart: the first is the byte work, the second decides what the trajectory keeps.
     fn row(&mut self, line: &[u8]) -> Result<()> {
         self.line += 1;
@@ -216,8 +216,16 @@ impl RowReader<'_> {
         if line.is_empty() || line[0] == b'#' {
             return Ok(());
         }
-        let fields = self.fields(line)?;
-        self.store(fields)
+        // Filled in place, not returned: moving the 264 bytes out through a `Result` cost 2 % of a
+        // TUM read (measured with callgrind on two million rows).
+        let mut fields = RowFields {
+            vals: [0.0f64; 8],
+            plain: [None; 8],
+            n: 0,
+            stamp_ns: None,
+        };
+        self.scan(line, &mut fields)?;
+        self.store(&fields)
     }
 
     /// The error of the current line.
@@ -233,14 +241,8 @@ impl RowReader<'_> {
     /// Scans the fields of a non-empty line: the stamp, up to 8 values and their plain digits.
     /// Inlined into [`RowReader::row`]: it runs once per line of files of millions of lines.
     #[inline]
-    fn fields(&self, line: &[u8]) -> Result<RowFields> {
+    fn scan(&self, line: &[u8], row: &mut RowFields) -> Result<()> {
         let decimal_quats = matches!(self.quats, Some(TumOrientations::Decimal(_)));
-        let mut row = RowFields {
-            vals: [0.0f64; 8],
-            plain: [None; 8],
-            n: 0,
-            stamp_ns: None,
-        };
         let mut k = 0usize;
         while let Some(f) = next_field(line, &mut k, self.orientation || row.n < 4) {
             let n = row.n;
@@ -268,19 +270,14 @@ impl RowReader<'_> {
             }
             row.n += 1;
         }
-        Ok(row)
+        Ok(())
     }
 
     /// Appends a scanned row: checks its width, picks how orientations are kept at the first row
     /// (decimal digits or quaternions) and pushes the position and the orientation.
     #[inline]
-    fn store(&mut self, row: RowFields) -> Result<()> {
-        let RowFields {
-            vals,
-            plain,
-            n,
-            stamp_ns,
-        } = row;
+    fn store(&mut self, row: &RowFields) -> Result<()> {
+        let (vals, plain, n) = (&row.vals, &row.plain, row.n);
         if n != 8 && n != 4 {
             return Err(self.bad(format!("{n} values on the line")));
         }
@@ -296,7 +293,7 @@ impl RowReader<'_> {
                 _ => TumOrientations::Quaternions(Vec::new()),
             });
         }
-        let stamp_ns = match stamp_ns.flatten() {
+        let stamp_ns = match row.stamp_ns.flatten() {
             Some(s) => s,
             None => return Err(self.bad("bad timestamp".into())),
         };
