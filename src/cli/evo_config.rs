@@ -28,6 +28,9 @@ pub fn expand(argv: Vec<OsString>) -> Vec<OsString> {
     }
 }
 
+/// Reads the command line once with clap; when it runs `ape`, `rpe`, `res` or `traj` with `-c FILE`,
+/// returns it rewritten: the arguments given ([`given_arguments`]) less those the JSON sets, then the
+/// JSON's ([`config_arguments`]); keys that name no flag are named once on stderr.
 fn try_expand(argv: &[OsString]) -> anyhow::Result<Option<Vec<OsString>>> {
     let cmd = Cli::command();
     let Ok(matches) = cmd.clone().try_get_matches_from(argv) else {
@@ -42,8 +45,34 @@ fn try_expand(argv: &[OsString]) -> anyhow::Result<Option<Vec<OsString>>> {
     let Some(path) = sub.get_one::<std::path::PathBuf>("config").cloned() else {
         return Ok(None);
     };
-    let text = std::fs::read_to_string(&path).map_err(|cause| trajdrift::Error::Io {
-        path: path.clone(),
+    let config = read_config(&path)?;
+    let sub_cmd = cmd
+        .find_subcommand(name)
+        .expect("the subcommand just parsed")
+        .clone();
+    let (mut positionals, mut options) = given_arguments(&sub_cmd, sub, &config);
+    let notes = config_arguments(&sub_cmd, &config, &mut options);
+    if !notes.is_empty() {
+        eprintln!(
+            "note: -c {}: {} not used here (evo settings or inputs); ignored",
+            path.display(),
+            notes.join(", ")
+        );
+    }
+    positionals.sort_by_key(|p| p.0);
+    let mut out: Vec<OsString> = vec![argv[0].clone(), name.into()];
+    out.extend(positionals.into_iter().flat_map(|p| p.1));
+    out.extend(options);
+    Ok(Some(out))
+}
+
+/// The JSON object of `-c FILE`: a file that cannot be read, is not JSON or not an object is a
+/// one-line error naming it.
+fn read_config(
+    path: &std::path::Path,
+) -> anyhow::Result<serde_json::Map<String, serde_json::Value>> {
+    let text = std::fs::read_to_string(path).map_err(|cause| trajdrift::Error::Io {
+        path: path.to_path_buf(),
         cause,
     })?;
     let json: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
@@ -59,26 +88,28 @@ fn try_expand(argv: &[OsString]) -> anyhow::Result<Option<Vec<OsString>>> {
         ))
         .into());
     };
-    let sub_cmd = cmd
-        .find_subcommand(name)
-        .expect("the subcommand just parsed")
-        .clone();
-    let find = |key: &str| {
-        sub_cmd.get_arguments().find(|a| {
-            a.get_id().as_str() == key
-                || a.get_long() == Some(key)
-                || a.get_long().map(|l| l.replace('-', "_")) == Some(key.replace('-', "_"))
-        })
-    };
+    Ok(config)
+}
+
+/// An option's flag as written on a command line: `--long`, else `-s`.
+fn flag_of(a: &clap::Arg) -> OsString {
+    match (a.get_long(), a.get_short()) {
+        (Some(l), _) => format!("--{l}").into(),
+        (None, Some(s)) => format!("-{s}").into(),
+        _ => OsString::new(),
+    }
+}
+
+/// The arguments given on the command line, written back as tokens, except `-c` itself and those
+/// `config` sets: the positionals as (index, values) and the options as flags (`--name=value`, or
+/// the flag and then its values when it took several).
+fn given_arguments(
+    sub_cmd: &clap::Command,
+    sub: &clap::ArgMatches,
+    config: &serde_json::Map<String, serde_json::Value>,
+) -> (Vec<(usize, Vec<OsString>)>, Vec<OsString>) {
     let mut positionals: Vec<(usize, Vec<OsString>)> = Vec::new();
     let mut options: Vec<OsString> = Vec::new();
-    let flag_of = |a: &clap::Arg| -> OsString {
-        match (a.get_long(), a.get_short()) {
-            (Some(l), _) => format!("--{l}").into(),
-            (None, Some(s)) => format!("-{s}").into(),
-            _ => OsString::new(),
-        }
-    };
     for a in sub_cmd.get_arguments() {
         let id = a.get_id().as_str();
         if id == "config"
@@ -125,8 +156,30 @@ fn try_expand(argv: &[OsString]) -> anyhow::Result<Option<Vec<OsString>>> {
             }
         }
     }
+    (positionals, options)
+}
+
+/// Appends the JSON's keys to `options` as flags of `sub_cmd` (found by id or long name, `-` and `_`
+/// alike): `true` the switch, `false`/`null` nothing, a list the flag and its values, anything else
+/// `--name=value`. Returns the keys that name no option (evo settings, positional inputs).
+fn config_arguments(
+    sub_cmd: &clap::Command,
+    config: &serde_json::Map<String, serde_json::Value>,
+    options: &mut Vec<OsString>,
+) -> Vec<String> {
+    let find = |key: &str| {
+        sub_cmd.get_arguments().find(|a| {
+            a.get_id().as_str() == key
+                || a.get_long() == Some(key)
+                || a.get_long().map(|l| l.replace('-', "_")) == Some(key.replace('-', "_"))
+        })
+    };
+    let scalar = |v: &serde_json::Value| match v {
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    };
     let mut notes = Vec::new();
-    for (key, value) in &config {
+    for (key, value) in config {
         let Some(a) = find(key) else {
             notes.push(key.clone());
             continue;
@@ -135,10 +188,6 @@ fn try_expand(argv: &[OsString]) -> anyhow::Result<Option<Vec<OsString>>> {
             notes.push(key.clone());
             continue;
         }
-        let scalar = |v: &serde_json::Value| match v {
-            serde_json::Value::String(s) => s.clone(),
-            other => other.to_string(),
-        };
         match (a.get_action(), value) {
             (ArgAction::SetTrue | ArgAction::Count, serde_json::Value::Bool(true)) => {
                 options.push(flag_of(a))
@@ -156,16 +205,5 @@ fn try_expand(argv: &[OsString]) -> anyhow::Result<Option<Vec<OsString>>> {
             }
         }
     }
-    if !notes.is_empty() {
-        eprintln!(
-            "note: -c {}: {} not used here (evo settings or inputs); ignored",
-            path.display(),
-            notes.join(", ")
-        );
-    }
-    positionals.sort_by_key(|p| p.0);
-    let mut out: Vec<OsString> = vec![argv[0].clone(), name.into()];
-    out.extend(positionals.into_iter().flat_map(|p| p.1));
-    out.extend(options);
-    Ok(Some(out))
+    notes
 }

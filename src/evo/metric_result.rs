@@ -236,21 +236,50 @@ pub fn figures(
     est_name: &str,
     o: &FigureOptions,
 ) -> Vec<(String, crate::plot::evo::EvoFigure)> {
-    use crate::plot::evo::{Coloured, ErrorSeries, EvoFigure, StatsBars, TrajectoryMap};
+    use crate::plot::evo::{EvoFigure, StatsBars};
     let label = format!("{} ({})", r.metric.to_uppercase(), unit_words(&r.unit));
     let one_line = title.replace('\n', " ");
-    let (x, x_label): (Vec<f64>, &str) = match (o.x_dimension.as_str(), &axes.seconds_from_start) {
+    let st = &r.stats;
+    let raw = raw_figure(r, axes, &o.x_dimension, &one_line, &label);
+    let map = map_figure(r, axes, est_name, o, &one_line, &label);
+    let names = ["rmse", "median", "mean", "std", "min", "max"];
+    let stats = StatsBars {
+        title: one_line,
+        value_label: label,
+        stats: names.iter().map(|s| s.to_string()).collect(),
+        results: vec![(
+            est_name.to_string(),
+            vec![st.rmse, st.median, st.mean, st.std, st.min, st.max],
+        )],
+    };
+    vec![
+        ("raw".into(), EvoFigure::Errors(raw)),
+        ("map".into(), EvoFigure::Map(map)),
+        ("stats".into(), EvoFigure::Stats(stats)),
+    ]
+}
+
+/// The raw figure: the values over `x_dimension` (`distances` or `seconds` when the poses have
+/// stamps, else the index), with rmse, median, mean and std.
+fn raw_figure(
+    r: &MetricResult,
+    axes: &ValueAxes,
+    x_dimension: &str,
+    title: &str,
+    label: &str,
+) -> crate::plot::evo::ErrorSeries {
+    let (x, x_label): (Vec<f64>, &str) = match (x_dimension, &axes.seconds_from_start) {
         ("distances", Some(_)) => (axes.distances_from_start.clone(), "d (m)"),
         ("seconds", Some(s)) => (s.clone(), "t (s)"),
         _ => ((0..r.values.len()).map(|i| i as f64).collect(), "index"),
     };
     let st = &r.stats;
-    let raw = ErrorSeries {
-        title: one_line.clone(),
+    crate::plot::evo::ErrorSeries {
+        title: title.to_string(),
         x_label: x_label.into(),
-        y_label: label.clone(),
+        y_label: label.to_string(),
         series: vec![(
-            label.clone(),
+            label.to_string(),
             x.iter().copied().zip(r.values.iter().copied()).collect(),
         )],
         stats: vec![
@@ -260,7 +289,21 @@ pub fn figures(
             ("std".into(), st.std),
         ],
         markers: false,
-    };
+    }
+}
+
+/// The map figure: the reference (the whole one with `--plot_full_ref`) and the estimate coloured
+/// by its values on the range of the `--plot_colormap_*` options (default: min to max).
+fn map_figure(
+    r: &MetricResult,
+    axes: &ValueAxes,
+    est_name: &str,
+    o: &FigureOptions,
+    title: &str,
+    label: &str,
+) -> crate::plot::evo::TrajectoryMap {
+    use crate::plot::evo::{Coloured, TrajectoryMap};
+    let st = &r.stats;
     let mut cmax = o.colormap_max.unwrap_or(st.max);
     if let Some(p) = o.colormap_max_percentile {
         let mut s = r.values.clone();
@@ -279,8 +322,8 @@ pub fn figures(
     let skip = est.len().saturating_sub(r.values.len());
     let mut values = vec![r.values.first().copied().unwrap_or(0.0); skip];
     values.extend(r.values.iter().copied());
-    let map = TrajectoryMap {
-        title: one_line.clone(),
+    TrajectoryMap {
+        title: title.to_string(),
         mode: o.mode,
         reference: Some(
             o.full_reference
@@ -294,24 +337,9 @@ pub fn figures(
             values,
             cmin,
             cmax,
-            value_label: label.clone(),
+            value_label: label.to_string(),
         }),
-    };
-    let names = ["rmse", "median", "mean", "std", "min", "max"];
-    let stats = StatsBars {
-        title: one_line,
-        value_label: label,
-        stats: names.iter().map(|s| s.to_string()).collect(),
-        results: vec![(
-            est_name.to_string(),
-            vec![st.rmse, st.median, st.mean, st.std, st.min, st.max],
-        )],
-    };
-    vec![
-        ("raw".into(), EvoFigure::Errors(raw)),
-        ("map".into(), EvoFigure::Map(map)),
-        ("stats".into(), EvoFigure::Stats(stats)),
-    ]
+    }
 }
 
 /// `--change_unit`: the values and statistics in `to` (m, cm, mm, km from a length; deg, rad from an

@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::plot::evo::{Distributions, ErrorSeries, EvoFigure, Histograms, StatsBars};
 use crate::report::evo_zip::{py_float, EvoResult};
 
-use super::runs::{compare, estimator_of, mean_interval, MissionPair, Verdict};
+use super::runs::{compare, estimator_of, mean_interval, Comparison, MissionPair, Verdict};
 use super::table::pandas_table;
 
 /// One loaded result file.
@@ -289,7 +289,9 @@ fn raw_x(r: &EvoResult, use_rel_time: bool) -> (Vec<f64>, &'static str) {
     ((0..n).map(|i| i as f64).collect(), "index")
 }
 
-/// evo_res's figures: raw, stats, histogram, box_plot, violin_histogram.
+/// evo_res's figures: raw, stats, histogram, box_plot, violin_histogram. Titles and axis labels
+/// come from the first result; the figures themselves from `raw_figure` and `stats_figure` and
+/// the same per-result values for the three distribution figures.
 pub fn figures(
     results: &[Loaded],
     ignore_title: bool,
@@ -309,61 +311,22 @@ pub fn figures(
         .and_then(|r| r.info_str("label"))
         .unwrap_or("value")
         .to_string();
-    let values = |r: &Loaded| {
-        r.result
-            .array("error_array")
-            .map(|a| a.data.clone())
-            .unwrap_or_default()
-    };
-    let series: Vec<(String, Vec<(f64, f64)>)> = results
-        .iter()
-        .map(|r| {
-            let (x, _) = raw_x(&r.result, use_rel_time);
-            (r.label.clone(), x.into_iter().zip(values(r)).collect())
-        })
-        .collect();
-    let x_label = first.map_or("index", |r| raw_x(r, use_rel_time).1);
-    let plotted = ["rmse", "median", "mean", "std", "min", "max"];
-    let stats: Vec<String> = stat_names(results)
-        .into_iter()
-        .filter(|s| plotted.contains(&s.as_str()))
-        .collect();
     let by_result: Vec<(String, Vec<f64>)> = results
         .iter()
-        .map(|r| (r.label.clone(), values(r)))
+        .map(|r| (r.label.clone(), error_values(r)))
         .collect();
+    let distributions = |violin: bool| Distributions {
+        title: title.clone(),
+        value_label: value_label.clone(),
+        results: by_result.clone(),
+        violin,
+    };
     vec![
         (
             "raw".into(),
-            EvoFigure::Errors(ErrorSeries {
-                title: title.clone(),
-                x_label: x_label.into(),
-                y_label: value_label.clone(),
-                series,
-                stats: Vec::new(),
-                markers,
-            }),
+            raw_figure(results, &title, &value_label, use_rel_time, markers),
         ),
-        (
-            "stats".into(),
-            EvoFigure::Stats(StatsBars {
-                title: title.clone(),
-                value_label: value_label.clone(),
-                results: results
-                    .iter()
-                    .map(|r| {
-                        (
-                            r.label.clone(),
-                            stats
-                                .iter()
-                                .map(|s| r.result.stat(s).unwrap_or(0.0))
-                                .collect(),
-                        )
-                    })
-                    .collect(),
-                stats,
-            }),
-        ),
+        ("stats".into(), stats_figure(results, &title, &value_label)),
         (
             "histogram".into(),
             EvoFigure::Histograms(Histograms {
@@ -374,23 +337,80 @@ pub fn figures(
         ),
         (
             "box_plot".into(),
-            EvoFigure::Distributions(Distributions {
-                title: title.clone(),
-                value_label: value_label.clone(),
-                results: by_result.clone(),
-                violin: false,
-            }),
+            EvoFigure::Distributions(distributions(false)),
         ),
         (
             "violin_histogram".into(),
-            EvoFigure::Distributions(Distributions {
-                title,
-                value_label,
-                results: by_result,
-                violin: true,
-            }),
+            EvoFigure::Distributions(distributions(true)),
         ),
     ]
+}
+
+/// A result's `error_array` (empty when it has none).
+fn error_values(r: &Loaded) -> Vec<f64> {
+    r.result
+        .array("error_array")
+        .map(|a| a.data.clone())
+        .unwrap_or_default()
+}
+
+/// The raw figure: every result's values over its own x values ([`raw_x`]), the axis named after
+/// the first result's.
+fn raw_figure(
+    results: &[Loaded],
+    title: &str,
+    value_label: &str,
+    use_rel_time: bool,
+    markers: bool,
+) -> EvoFigure {
+    let series: Vec<(String, Vec<(f64, f64)>)> = results
+        .iter()
+        .map(|r| {
+            let (x, _) = raw_x(&r.result, use_rel_time);
+            (
+                r.label.clone(),
+                x.into_iter().zip(error_values(r)).collect(),
+            )
+        })
+        .collect();
+    let x_label = results
+        .first()
+        .map_or("index", |r| raw_x(&r.result, use_rel_time).1);
+    EvoFigure::Errors(ErrorSeries {
+        title: title.to_string(),
+        x_label: x_label.into(),
+        y_label: value_label.to_string(),
+        series,
+        stats: Vec::new(),
+        markers,
+    })
+}
+
+/// The statistics figure: the plotted statistics (rmse, median, mean, std, min, max, in the table's
+/// order) of every result as bars; a statistic a result lacks draws as 0.
+fn stats_figure(results: &[Loaded], title: &str, value_label: &str) -> EvoFigure {
+    let plotted = ["rmse", "median", "mean", "std", "min", "max"];
+    let stats: Vec<String> = stat_names(results)
+        .into_iter()
+        .filter(|s| plotted.contains(&s.as_str()))
+        .collect();
+    EvoFigure::Stats(StatsBars {
+        title: title.to_string(),
+        value_label: value_label.to_string(),
+        results: results
+            .iter()
+            .map(|r| {
+                (
+                    r.label.clone(),
+                    stats
+                        .iter()
+                        .map(|s| r.result.stat(s).unwrap_or(0.0))
+                        .collect(),
+                )
+            })
+            .collect(),
+        stats,
+    })
 }
 
 /// The mission a result belongs to: its reference's name.
@@ -468,7 +488,9 @@ pub fn runs_report(results: &[Loaded]) -> String {
     s
 }
 
-/// `--compare A B`: B against A on the missions both ran, on statistic `stat`.
+/// `--compare A B`: B against A on the missions both ran, on statistic `stat`: the estimators are
+/// checked, the values paired by mission (`mission_pairs`), compared ([`compare`]) and reported
+/// (`comparison_text`).
 pub fn compare_report(
     results: &[Loaded],
     a: &str,
@@ -488,6 +510,14 @@ pub fn compare_report(
             )));
         }
     }
+    let missions = mission_pairs(results, a, b, stat)?;
+    let c = compare(&missions);
+    Ok((comparison_text(&missions, &c, a, b, stat), c.verdict))
+}
+
+/// The values of `stat` of estimators `a` and `b`, by mission in the order missions first appear;
+/// a result of either without `stat` is an error.
+fn mission_pairs(results: &[Loaded], a: &str, b: &str, stat: &str) -> Result<Vec<MissionPair>> {
     let mut missions: Vec<MissionPair> = Vec::new();
     for r in results {
         let est = estimator_of(&r.path);
@@ -522,7 +552,18 @@ pub fn compare_report(
             entry.b.push(v);
         }
     }
-    let c = compare(&missions);
+    Ok(missions)
+}
+
+/// The comparison as printed: a row per mission both ran, the relative difference with its
+/// interval, and the verdict in words.
+fn comparison_text(
+    missions: &[MissionPair],
+    c: &Comparison,
+    a: &str,
+    b: &str,
+    stat: &str,
+) -> String {
     let mut rows = vec![vec![
         "mission".to_string(),
         format!("{a} runs"),
@@ -578,7 +619,7 @@ pub fn compare_report(
                 .to_string()
         }
     };
-    Ok((s, c.verdict))
+    s
 }
 
 /// Rows of cells as left-aligned columns.

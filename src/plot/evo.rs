@@ -6,6 +6,8 @@
 //! evo's `--plot_mode` picks the axes of the trajectory figures: `xy`, `xz`, `yx`, `yz`, `zx`, `zy`
 //! draw that plane at equal scale, `xyz` a 3-D view.
 
+use plotters::coord::cartesian::Cartesian3d;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -173,6 +175,10 @@ pub struct Coloured {
 
 const BAR_W: u32 = 130;
 
+/// A 3-D chart over metres on every axis.
+type Chart3d<'a, DB> =
+    ChartContext<'a, DB, Cartesian3d<RangedCoordf64, RangedCoordf64, RangedCoordf64>>;
+
 impl TrajectoryMap {
     fn every_position(&self) -> impl Iterator<Item = &[f64; 3]> {
         self.reference
@@ -288,33 +294,10 @@ impl TrajectoryMap {
         legend(&mut chart, SeriesLabelPosition::UpperLeft)
     }
 
+    /// The 3-D view: the reference, the trajectories and the coloured estimate in the cube of
+    /// [`TrajectoryMap::chart_3d`], z up.
     fn draw_3d<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()> {
-        let r = |k: usize| padded_range(self.every_position().map(|p| p[k]));
-        let ((x0, x1), (y0, y1), (z0, z1)) = (r(0), r(1), r(2));
-        // One scale on all axes, as evo's plot_xyz_realistic.
-        let half = [(x1 - x0), (y1 - y0), (z1 - z0)]
-            .into_iter()
-            .fold(0.0f64, f64::max)
-            / 2.0;
-        let c = |a: f64, b: f64| ((a + b) / 2.0 - half, (a + b) / 2.0 + half);
-        let ((x0, x1), (y0, y1), (z0, z1)) = (c(x0, x1), c(y0, y1), c(z0, z1));
-        // plotters' 3-D axes are (x, y up, z depth): our z goes up.
-        let mut chart = ChartBuilder::on(area)
-            .caption(&self.title, title_font())
-            .margin(20)
-            .build_cartesian_3d(x0..x1, z0..z1, y0..y1)
-            .map_err(plot_err)?;
-        chart.with_projection(|mut p| {
-            p.yaw = 0.6;
-            p.pitch = 0.35;
-            p.scale = 0.8;
-            p.into_matrix()
-        });
-        chart
-            .configure_axes()
-            .label_style(label_font())
-            .draw()
-            .map_err(plot_err)?;
+        let mut chart = self.chart_3d(area)?;
         let up = |p: &[f64; 3]| (p[0], p[2], p[1]);
         if let Some(r) = &self.reference {
             let grey = RGBColor(110, 110, 110);
@@ -368,6 +351,41 @@ impl TrajectoryMap {
             .position(SeriesLabelPosition::UpperLeft)
             .draw()
             .map_err(plot_err)
+    }
+
+    /// The titled 3-D chart with its axes drawn: one scale on all axes (a cube around every position,
+    /// as evo's `plot_xyz_realistic`), seen from a fixed yaw and pitch.
+    fn chart_3d<'a, DB: DrawingBackend>(
+        &self,
+        area: &'a DrawingArea<DB, Shift>,
+    ) -> Result<Chart3d<'a, DB>> {
+        let r = |k: usize| padded_range(self.every_position().map(|p| p[k]));
+        let ((x0, x1), (y0, y1), (z0, z1)) = (r(0), r(1), r(2));
+        // One scale on all axes, as evo's plot_xyz_realistic.
+        let half = [(x1 - x0), (y1 - y0), (z1 - z0)]
+            .into_iter()
+            .fold(0.0f64, f64::max)
+            / 2.0;
+        let c = |a: f64, b: f64| ((a + b) / 2.0 - half, (a + b) / 2.0 + half);
+        let ((x0, x1), (y0, y1), (z0, z1)) = (c(x0, x1), c(y0, y1), c(z0, z1));
+        // plotters' 3-D axes are (x, y up, z depth): our z goes up.
+        let mut chart = ChartBuilder::on(area)
+            .caption(&self.title, title_font())
+            .margin(20)
+            .build_cartesian_3d(x0..x1, z0..z1, y0..y1)
+            .map_err(plot_err)?;
+        chart.with_projection(|mut p| {
+            p.yaw = 0.6;
+            p.pitch = 0.35;
+            p.scale = 0.8;
+            p.into_matrix()
+        });
+        chart
+            .configure_axes()
+            .label_style(label_font())
+            .draw()
+            .map_err(plot_err)?;
+        Ok(chart)
     }
 }
 
@@ -577,75 +595,106 @@ impl Draw for Distributions {
             }
             s.sort_by(f64::total_cmp);
             let c = series_color(k, n.max(2));
-            let x = k as f64;
-            let (q1, med, q3) = (
-                quantile_sorted(&s, 0.25),
-                quantile_sorted(&s, 0.5),
-                quantile_sorted(&s, 0.75),
-            );
             if self.violin {
-                self.violin_shape(&mut chart, &s, x, c)?;
-                chart
-                    .draw_series([Rectangle::new(
-                        [(x - 0.03, q1), (x + 0.03, q3)],
-                        BLACK.filled(),
-                    )])
-                    .map_err(plot_err)?;
-                chart
-                    .draw_series([Circle::new((x, med), 4, WHITE.filled())])
-                    .map_err(plot_err)?;
-                continue;
+                self.violin(&mut chart, &s, k as f64, c)?;
+            } else {
+                self.box_plot(&mut chart, &s, k as f64, c)?;
             }
-            let iqr = q3 - q1;
-            let lo_w = s
-                .iter()
-                .copied()
-                .find(|&v| v >= q1 - 1.5 * iqr)
-                .unwrap_or(q1);
-            let hi_w = s
-                .iter()
-                .rev()
-                .copied()
-                .find(|&v| v <= q3 + 1.5 * iqr)
-                .unwrap_or(q3);
-            chart
-                .draw_series([Rectangle::new(
-                    [(x - 0.3, q1), (x + 0.3, q3)],
-                    c.mix(0.5).filled(),
-                )])
-                .map_err(plot_err)?;
-            let lines = vec![
-                vec![(x - 0.3, med), (x + 0.3, med)],
-                vec![(x, q3), (x, hi_w)],
-                vec![(x, q1), (x, lo_w)],
-                vec![(x - 0.15, hi_w), (x + 0.15, hi_w)],
-                vec![(x - 0.15, lo_w), (x + 0.15, lo_w)],
-            ];
-            chart
-                .draw_series(
-                    lines
-                        .into_iter()
-                        .map(|l| PathElement::new(l, BLACK.stroke_width(2))),
-                )
-                .map_err(plot_err)?;
-            let outliers: Vec<f64> = s
-                .iter()
-                .copied()
-                .filter(|&v| v < lo_w || v > hi_w)
-                .collect();
-            chart
-                .draw_series(
-                    thin(&outliers)
-                        .into_iter()
-                        .map(|v| Circle::new((x, v), 3, BLACK.stroke_width(1))),
-                )
-                .map_err(plot_err)?;
         }
         Ok(())
     }
 }
 
+/// The first quartile, the median and the third quartile of sorted values.
+fn quartiles(s: &[f64]) -> (f64, f64, f64) {
+    (
+        quantile_sorted(s, 0.25),
+        quantile_sorted(s, 0.5),
+        quantile_sorted(s, 0.75),
+    )
+}
+
 impl Distributions {
+    /// One violin at `x` ([`Distributions::violin_shape`]) with its quartiles as a black bar and
+    /// its median as a white dot; `s` sorted and finite.
+    fn violin<DB: DrawingBackend>(
+        &self,
+        chart: &mut super::style::Chart<'_, DB>,
+        s: &[f64],
+        x: f64,
+        c: RGBColor,
+    ) -> Result<()> {
+        let (q1, med, q3) = quartiles(s);
+        self.violin_shape(chart, s, x, c)?;
+        chart
+            .draw_series([Rectangle::new(
+                [(x - 0.03, q1), (x + 0.03, q3)],
+                BLACK.filled(),
+            )])
+            .map_err(plot_err)?;
+        chart
+            .draw_series([Circle::new((x, med), 4, WHITE.filled())])
+            .map_err(plot_err)?;
+        Ok(())
+    }
+
+    /// One box at `x`: the quartiles as a box, the median as a line, whiskers to the furthest values
+    /// within 1.5 IQR of the box, the values beyond them as circles; `s` sorted and finite.
+    fn box_plot<DB: DrawingBackend>(
+        &self,
+        chart: &mut super::style::Chart<'_, DB>,
+        s: &[f64],
+        x: f64,
+        c: RGBColor,
+    ) -> Result<()> {
+        let (q1, med, q3) = quartiles(s);
+        let iqr = q3 - q1;
+        let lo_w = s
+            .iter()
+            .copied()
+            .find(|&v| v >= q1 - 1.5 * iqr)
+            .unwrap_or(q1);
+        let hi_w = s
+            .iter()
+            .rev()
+            .copied()
+            .find(|&v| v <= q3 + 1.5 * iqr)
+            .unwrap_or(q3);
+        chart
+            .draw_series([Rectangle::new(
+                [(x - 0.3, q1), (x + 0.3, q3)],
+                c.mix(0.5).filled(),
+            )])
+            .map_err(plot_err)?;
+        let lines = vec![
+            vec![(x - 0.3, med), (x + 0.3, med)],
+            vec![(x, q3), (x, hi_w)],
+            vec![(x, q1), (x, lo_w)],
+            vec![(x - 0.15, hi_w), (x + 0.15, hi_w)],
+            vec![(x - 0.15, lo_w), (x + 0.15, lo_w)],
+        ];
+        chart
+            .draw_series(
+                lines
+                    .into_iter()
+                    .map(|l| PathElement::new(l, BLACK.stroke_width(2))),
+            )
+            .map_err(plot_err)?;
+        let outliers: Vec<f64> = s
+            .iter()
+            .copied()
+            .filter(|&v| v < lo_w || v > hi_w)
+            .collect();
+        chart
+            .draw_series(
+                thin(&outliers)
+                    .into_iter()
+                    .map(|v| Circle::new((x, v), 3, BLACK.stroke_width(1))),
+            )
+            .map_err(plot_err)?;
+        Ok(())
+    }
+
     /// A mirrored Gaussian kernel density estimate (Scott's bandwidth, as seaborn's default) at
     /// `x`, scaled to a half-width of 0.4.
     fn violin_shape<DB: DrawingBackend>(

@@ -114,9 +114,52 @@ fn auto_offset(
     Ok((correction, weak))
 }
 
-/// Runs the command; returns the exit code.
+/// Runs the command; returns the exit code. A pipeline, one stage per function, each a no-op unless
+/// its flags are given: read, resample, merge, shift the clocks, align, transform, project; then the
+/// reports (information and checks, the table, the conversions, the figures) of what it made.
 pub fn run(a: TrajArgs) -> Result<u8> {
     let log = EvoLog::new(&a.usability, &a);
+    warn_ignored(&a, &log);
+    let mut inputs: Vec<PathBuf> = a.inputs.iter().map(PathBuf::from).collect();
+    inputs.extend(a.reference.iter().map(PathBuf::from));
+    let guard = OutputGuard::new(&inputs);
+    if let Some(l) = &a.usability.logfile {
+        guard.check("--logfile", l)?;
+    }
+    let (mut ts, reference) = read(&a)?;
+    let mut code = EXIT_OK;
+    resample(&a, &mut ts, &log)?;
+    if a.merge {
+        if ts.iter().any(|t| !t.stamped) {
+            return Err(trajdrift::Error::InvalidArgument(
+                "--merge: can't merge KITTI files (no stamps)".into(),
+            )
+            .into());
+        }
+        ts = vec![merge(ts)];
+    }
+    if shift_clocks(&a, &mut ts, reference.as_ref(), &log)? {
+        code = EXIT_WARNING;
+    }
+    align_all(&a, &mut ts, reference.as_ref(), &log)?;
+    transform_all(&a, &mut ts, &log)?;
+    project(&a, &mut ts);
+    let all: Vec<&TrajInput> = ts.iter().chain(reference.iter()).collect();
+    code = code.max(report_info(&a, &all, &log)?);
+    if let Some(path) = &a.save_table {
+        guard.write("--save_table", path, info_csv(&all).as_bytes())?;
+    }
+    save_conversions(&a, &all, &guard, &log)?;
+    if (a.plot || a.save_plot.is_some()) && write_plots(&a, &ts, reference.as_ref(), &guard, &log)?
+    {
+        code = code.max(EXIT_WARNING);
+    }
+    log.finish(&guard)?;
+    Ok(code)
+}
+
+/// Warns of each evo flag given that has no effect here (viewers, map layers, topic discovery).
+fn warn_ignored(a: &TrajArgs, log: &EvoLog) {
     for note in ignored_notes(&[
         (
             "--rerun",
@@ -146,14 +189,10 @@ pub fn run(a: TrajArgs) -> Result<u8> {
     ]) {
         log.warn(&note);
     }
-    let mut inputs: Vec<PathBuf> = a.inputs.iter().map(PathBuf::from).collect();
-    inputs.extend(a.reference.iter().map(PathBuf::from));
-    let guard = OutputGuard::new(&inputs);
-    if let Some(l) = &a.usability.logfile {
-        guard.check("--logfile", l)?;
-    }
-    let (mut ts, reference) = read(&a)?;
-    let mut code = EXIT_OK;
+}
+
+/// `--downsample N` then `--motion_filter D A` on every trajectory (not the reference).
+fn resample(a: &TrajArgs, ts: &mut [TrajInput], log: &EvoLog) -> Result<()> {
     if let Some(n) = a.downsample {
         for t in ts.iter_mut() {
             let ids = downsample_ids(t.trajectory.len(), n);
@@ -178,24 +217,27 @@ pub fn run(a: TrajArgs) -> Result<u8> {
             ));
         }
     }
-    if a.merge {
-        if ts.iter().any(|t| !t.stamped) {
-            return Err(trajdrift::Error::InvalidArgument(
-                "--merge: can't merge KITTI files (no stamps)".into(),
-            )
-            .into());
-        }
-        ts = vec![merge(ts)];
-    }
-    // Time offsets: --t_offset S for every trajectory, or each found against the reference.
+    Ok(())
+}
+
+/// Time offsets: `--t_offset S` for every trajectory, `--time-offset S`, or `--time-offset auto`,
+/// each found against the reference ([`auto_offset`]) and applied as its clock correction. Returns
+/// true when an automatic offset was not confident (then none was applied: a warning).
+fn shift_clocks(
+    a: &TrajArgs,
+    ts: &mut [TrajInput],
+    reference: Option<&TrajInput>,
+    log: &EvoLog,
+) -> Result<bool> {
+    let mut weak_any = false;
     for t in ts.iter_mut() {
-        let offset = match (a.t_offset, a.time_offset.as_deref(), &reference) {
+        let offset = match (a.t_offset, a.time_offset.as_deref(), reference) {
             (Some(s), _, _) => s,
             (None, Some("auto"), Some(r)) => {
-                let (correction, weak) = auto_offset(&a, r, t, &log)?;
+                let (correction, weak) = auto_offset(a, r, t, log)?;
                 if weak {
                     log.warn(&format!("warning [weak_time_offset]: {}: the automatic time offset is not confident; none was applied", t.name));
-                    code = EXIT_WARNING;
+                    weak_any = true;
                 }
                 t.trajectory = correction.apply(&t.trajectory);
                 0.0
@@ -218,8 +260,20 @@ pub fn run(a: TrajArgs) -> Result<u8> {
             log.detail(&format!("{}: stamps shifted by {offset:+} s", t.name));
         }
     }
-    // Alignment onto the reference.
-    let wants_alignment = a.align || a.correct_scale || a.align_origin || a.sync;
+    Ok(weak_any)
+}
+
+/// `-a`, `-s`, `--align_origin`, `--sync`: every trajectory aligned onto the reference (which they
+/// need).
+fn align_all(
+    a: &TrajArgs,
+    ts: &mut [TrajInput],
+    reference: Option<&TrajInput>,
+    log: &EvoLog,
+) -> Result<()> {
+    if !(a.align || a.correct_scale || a.align_origin || a.sync) {
+        return Ok(());
+    }
     let options = AlignOptions {
         align: a.align,
         correct_scale: a.correct_scale,
@@ -229,86 +283,118 @@ pub fn run(a: TrajArgs) -> Result<u8> {
         sync: a.sync,
         interpolate: a.sync_method == "interpolation",
     };
-    if wants_alignment {
-        let Some(r) = &reference else {
-            return Err(trajdrift::Error::InvalidArgument(
-                "-a, -s, --align_origin and --sync need a reference: --ref REF".into(),
-            )
-            .into());
-        };
-        for t in ts.iter_mut() {
-            let (aligned, sim) = align_to(r, t, &options)?;
-            log.detail(&format!(
-                "{}: aligned onto {}: rotation {:?}, translation {:?}, scale {}",
-                t.name, r.name, sim.rotation, sim.translation, sim.scale
-            ));
-            t.trajectory = aligned;
-        }
+    let Some(r) = reference else {
+        return Err(trajdrift::Error::InvalidArgument(
+            "-a, -s, --align_origin and --sync need a reference: --ref REF".into(),
+        )
+        .into());
+    };
+    for t in ts.iter_mut() {
+        let (aligned, sim) = align_to(r, t, &options)?;
+        log.detail(&format!(
+            "{}: aligned onto {}: rotation {:?}, translation {:?}, scale {}",
+            t.name, r.name, sim.rotation, sim.translation, sim.scale
+        ));
+        t.trajectory = aligned;
     }
-    if let Some((file, right)) = a
+    Ok(())
+}
+
+/// `--transform_left FILE` (else `--transform_right FILE`), inverted with `--invert_transform`,
+/// applied to every trajectory.
+fn transform_all(a: &TrajArgs, ts: &mut [TrajInput], log: &EvoLog) -> Result<()> {
+    let Some((file, right)) = a
         .transform_left
         .as_ref()
         .map(|f| (f, false))
         .or(a.transform_right.as_ref().map(|f| (f, true)))
-    {
-        let mut t = load_transform(Path::new(file))?;
-        if a.invert_transform {
-            t = invert(&t);
-        }
-        for x in ts.iter_mut() {
-            transform(&mut x.trajectory, &t, right, a.propagate_transform);
-        }
-        log.detail(&format!(
-            "{} transformation from {file} applied",
-            if right { "right" } else { "left" }
-        ));
+    else {
+        return Ok(());
+    };
+    let mut t = load_transform(Path::new(file))?;
+    if a.invert_transform {
+        t = invert(&t);
     }
-    if let Some(plane) = &a.project_to_plane {
-        let k = match plane.as_str() {
-            "xz" => 1,
-            "yz" => 0,
-            _ => 2,
-        };
-        for t in ts.iter_mut() {
-            for p in t.trajectory.positions.iter_mut() {
-                p[k] = 0.0;
-            }
+    for x in ts.iter_mut() {
+        transform(&mut x.trajectory, &t, right, a.propagate_transform);
+    }
+    log.detail(&format!(
+        "{} transformation from {file} applied",
+        if right { "right" } else { "left" }
+    ));
+    Ok(())
+}
+
+/// `--project_to_plane xy|xz|yz`: the third coordinate of every position set to 0.
+fn project(a: &TrajArgs, ts: &mut [TrajInput]) {
+    let Some(plane) = &a.project_to_plane else {
+        return;
+    };
+    let k = match plane.as_str() {
+        "xz" => 1,
+        "yz" => 0,
+        _ => 2,
+    };
+    for t in ts.iter_mut() {
+        for p in t.trajectory.positions.iter_mut() {
+            p[k] = 0.0;
         }
     }
-    // The information table and the checks.
-    let all: Vec<&TrajInput> = ts.iter().chain(reference.iter()).collect();
-    log.result(&info_table(&all))?;
+}
+
+/// The information table, and with `-f` (or `-v`) evo's checks of each trajectory; returns
+/// [`EXIT_WARNING`] when `-f` finds a trajectory that fails them.
+fn report_info(a: &TrajArgs, all: &[&TrajInput], log: &EvoLog) -> Result<u8> {
+    log.result(&info_table(all))?;
     if a.full_check || a.usability.verbose {
-        for t in &all {
+        for t in all {
             log.result(&full_check_text(t))?;
         }
     }
     if a.full_check && all.iter().any(|t| !check(t).valid()) {
         log.warn("warning [check_failed]: a trajectory failed evo's checks (see `checks:` above)");
-        code = code.max(EXIT_WARNING);
+        return Ok(EXIT_WARNING);
     }
-    if let Some(path) = &a.save_table {
-        let mut csv = String::from("name,poses,length_m,duration_s,rate_hz,dt_max_s,gaps,stamps_going_back,duplicate_stamps\n");
-        for t in &all {
-            let i = trajdrift::evo::traj::info(t);
-            let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
-            csv += &format!(
-                "{},{},{},{},{},{},{},{},{}\n",
-                trajdrift::report::escape::csv_field(&t.name),
-                i.poses,
-                i.length_m,
-                o(i.duration_s),
-                o(i.rate_hz),
-                o(i.dt_max_s),
-                i.gaps,
-                t.rows.stamp_going_back,
-                t.rows.duplicate_stamp
-            );
-        }
-        guard.write("--save_table", path, csv.as_bytes())?;
+    Ok(EXIT_OK)
+}
+
+/// The information table as the CSV of `--save_table`.
+fn info_csv(all: &[&TrajInput]) -> String {
+    let mut csv = String::from(
+        "name,poses,length_m,duration_s,rate_hz,dt_max_s,gaps,stamps_going_back,duplicate_stamps\n",
+    );
+    for t in all {
+        let i = trajdrift::evo::traj::info(t);
+        let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+        csv += &format!(
+            "{},{},{},{},{},{},{},{},{}\n",
+            trajdrift::report::escape::csv_field(&t.name),
+            i.poses,
+            i.length_m,
+            o(i.duration_s),
+            o(i.rate_hz),
+            o(i.dt_max_s),
+            i.gaps,
+            t.rows.stamp_going_back,
+            t.rows.duplicate_stamp
+        );
     }
-    // Conversions: NAME.tum / NAME.kitti in the current folder, one MCAP for all.
-    let stem = |t: &TrajInput| trajdrift::plot::file_stem(&t.name.replace('/', "_"));
+    csv
+}
+
+/// A trajectory's file stem (its name, `/` replaced).
+fn stem(t: &TrajInput) -> String {
+    trajdrift::plot::file_stem(&t.name.replace('/', "_"))
+}
+
+/// Conversions: NAME.tum / NAME.kitti in the current folder, and one MCAP for all
+/// (`--save_as_mcap`, or `--save_as_bag`/`--save_as_bag2`, which evo writes as bags).
+fn save_conversions(
+    a: &TrajArgs,
+    all: &[&TrajInput],
+    guard: &OutputGuard,
+    log: &EvoLog,
+) -> Result<()> {
     for (flag, on, ext, fmt) in [
         ("--save_as_tum", a.save_as_tum, "tum", SaveAs::Tum),
         ("--save_as_kitti", a.save_as_kitti, "kitti", SaveAs::Kitti),
@@ -322,9 +408,9 @@ pub fn run(a: TrajArgs) -> Result<u8> {
             all.iter().map(|t| t.name.as_str()),
             "give them distinct names",
         )?;
-        for t in &all {
+        for t in all {
             let path = PathBuf::from(format!("{}.{ext}", stem(t)));
-            save(&guard, flag, &path, &t.trajectory, fmt)?;
+            save(guard, flag, &path, &t.trajectory, fmt)?;
             log.note(&format!("{}: written to {}", t.name, path.display()));
         }
     }
@@ -341,7 +427,7 @@ pub fn run(a: TrajArgs) -> Result<u8> {
             .iter()
             .map(|t| (topic_name(&t.name), &t.trajectory))
             .collect();
-        save_mcap(&guard, "--save_as_mcap", &path, &list)?;
+        save_mcap(guard, "--save_as_mcap", &path, &list)?;
         log.note(&format!(
             "trajectories written to {} ({})",
             path.display(),
@@ -351,20 +437,27 @@ pub fn run(a: TrajArgs) -> Result<u8> {
                 .join(", ")
         ));
     }
-    if a.plot || a.save_plot.is_some() {
-        let list: Vec<(String, &Trajectory)> =
-            ts.iter().map(|t| (t.name.clone(), &t.trajectory)).collect();
-        let figs = figures(
-            &list,
-            reference.as_ref().map(|r| (r.name.as_str(), &r.trajectory)),
-            PlotMode::parse(&a.plot_mode)?,
-            a.plot_relative_time,
-        );
-        let base = PathBuf::from(format!("traj_{}", ts.first().map(stem).unwrap_or_default()));
-        if super::metric::write_figures(&log, &guard, a.save_plot.as_deref(), &base, &figs)? {
-            code = code.max(EXIT_WARNING);
-        }
-    }
-    log.finish(&guard)?;
-    Ok(code)
+    Ok(())
+}
+
+/// `-p` / `--save_plot`: the trajectories and x/y/z figures, beside the first input
+/// (`traj_NAME_...`) or at `--save_plot`. Returns true when a figure could not be written as asked
+/// (a warning).
+fn write_plots(
+    a: &TrajArgs,
+    ts: &[TrajInput],
+    reference: Option<&TrajInput>,
+    guard: &OutputGuard,
+    log: &EvoLog,
+) -> Result<bool> {
+    let list: Vec<(String, &Trajectory)> =
+        ts.iter().map(|t| (t.name.clone(), &t.trajectory)).collect();
+    let figs = figures(
+        &list,
+        reference.map(|r| (r.name.as_str(), &r.trajectory)),
+        PlotMode::parse(&a.plot_mode)?,
+        a.plot_relative_time,
+    );
+    let base = PathBuf::from(format!("traj_{}", ts.first().map(stem).unwrap_or_default()));
+    super::metric::write_figures(log, guard, a.save_plot.as_deref(), &base, &figs)
 }

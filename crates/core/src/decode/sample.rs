@@ -153,40 +153,37 @@ pub fn decode_sample(kind: MessageKind, data: &[u8]) -> Result<Sample, String> {
 }
 
 /// Decodes one message of `kind` serialized with `encoding`.
+///
+/// One flat match over the kinds, each arm the decoder of its encoding and the fields it keeps;
+/// what is more than field picking (a pose's orientation, a fix's validity) has its own function.
 pub fn decode_message(
     kind: MessageKind,
     encoding: Encoding,
     data: &[u8],
 ) -> Result<Sample, String> {
-    let local = |p: ros2_msgs::Point| SamplePosition::Local(Vector3::new(p.x, p.y, p.z));
-    let posed = |stamp: ros2_msgs::Time, pose: ros2_msgs::Pose| Sample {
-        stamp_ns: stamp.to_ns(),
-        position: local(pose.position),
-        orientation: orientation(pose.orientation),
-    };
     // CDR: only the leading fields a trajectory needs (see `ros2_prefix`). The ROS 1 reader yields
     // the full structs.
     let cdr = encoding == Encoding::Cdr;
     Ok(match kind {
         MessageKind::PoseWithCovarianceStamped | MessageKind::PoseStamped if cdr => {
             let m = cdr::decode::<ros2_prefix::StampedPose>(data)?;
-            posed(m.header.stamp, m.pose)
+            pose_sample(m.header.stamp, m.pose)
         }
         MessageKind::PoseWithCovarianceStamped => {
             let m = ros1::pose_with_covariance_stamped(data)?;
-            posed(m.header.stamp, m.pose.pose)
+            pose_sample(m.header.stamp, m.pose.pose)
         }
         MessageKind::PoseStamped => {
             let m = ros1::pose_stamped(data)?;
-            posed(m.header.stamp, m.pose)
+            pose_sample(m.header.stamp, m.pose)
         }
         MessageKind::Odometry if cdr => {
             let m = cdr::decode::<ros2_prefix::OdometryPose>(data)?;
-            posed(m.header.stamp, m.pose)
+            pose_sample(m.header.stamp, m.pose)
         }
         MessageKind::Odometry => {
             let m = ros1::odometry(data)?;
-            posed(m.header.stamp, m.pose.pose)
+            pose_sample(m.header.stamp, m.pose.pose)
         }
         MessageKind::TransformStamped => {
             let (stamp, t) = if cdr {
@@ -216,29 +213,49 @@ pub fn decode_message(
                 orientation: None,
             }
         }
-        MessageKind::NavSatFix => {
-            let m = if cdr {
-                cdr::decode::<NavSatFix>(data)?
-            } else {
-                ros1::nav_sat_fix(data)?
-            };
-            // STATUS_NO_FIX = -1; anything below FIX (0) is not a fix.
-            let valid = m.status.status >= 0
-                && m.latitude.is_finite()
-                && m.longitude.is_finite()
-                && m.altitude.is_finite();
-            Sample {
-                stamp_ns: m.header.stamp.to_ns(),
-                position: SamplePosition::Geodetic {
-                    lat_deg: m.latitude,
-                    lon_deg: m.longitude,
-                    alt_m: m.altitude,
-                    valid,
-                },
-                orientation: None,
-            }
-        }
+        MessageKind::NavSatFix => fix_sample(if cdr {
+            cdr::decode::<NavSatFix>(data)?
+        } else {
+            ros1::nav_sat_fix(data)?
+        }),
     })
+}
+
+/// A position in the message's frame.
+#[inline]
+fn local(p: ros2_msgs::Point) -> SamplePosition {
+    SamplePosition::Local(Vector3::new(p.x, p.y, p.z))
+}
+
+/// The sample of a stamped pose: every pose-carrying kind ends here, whatever wraps the pose.
+#[inline]
+fn pose_sample(stamp: ros2_msgs::Time, pose: ros2_msgs::Pose) -> Sample {
+    Sample {
+        stamp_ns: stamp.to_ns(),
+        position: local(pose.position),
+        orientation: orientation(pose.orientation),
+    }
+}
+
+/// The geodetic sample of a fix. Apart from decoding because it decides something: which fixes are
+/// usable (a status of at least FIX and finite values), which later steps only read.
+#[inline]
+fn fix_sample(m: NavSatFix) -> Sample {
+    // STATUS_NO_FIX = -1; anything below FIX (0) is not a fix.
+    let valid = m.status.status >= 0
+        && m.latitude.is_finite()
+        && m.longitude.is_finite()
+        && m.altitude.is_finite();
+    Sample {
+        stamp_ns: m.header.stamp.to_ns(),
+        position: SamplePosition::Geodetic {
+            lat_deg: m.latitude,
+            lon_deg: m.longitude,
+            alt_m: m.altitude,
+            valid,
+        },
+        orientation: None,
+    }
 }
 
 /// A unit quaternion from a message's, or `None` for a zero or non-finite one (drivers that do not

@@ -225,48 +225,15 @@ pub fn read_mapped_csv(path: &Path, mapping: &CsvMapping) -> Result<Trajectory> 
 }
 
 /// [`read_mapped_csv`], and what became of every row ([`Trajectory::clean`]).
+///
+/// Three steps: the header is read and the mapping resolved to column indices (a mapping the file
+/// cannot satisfy fails before any row is read), then every record becomes one pose.
 pub fn read_mapped_csv_audited(
     path: &Path,
     mapping: &CsvMapping,
 ) -> Result<(Trajectory, RowAudit)> {
     let head = read_header(path)?;
-    let header = &head.columns;
-    let resolve = |field: &str, c: &Column| -> Result<usize> {
-        let found = match c {
-            Column::Index(i) => (*i < header.len()).then_some(*i),
-            Column::Name(n) => header.iter().position(|h| {
-                h == n || h.split_once(" [").is_some_and(|(stem, _)| stem.trim() == n)
-            }),
-        };
-        found.ok_or_else(|| Error::Text {
-            path: path.to_path_buf(),
-            line: 1,
-            detail: format!(
-                "the CSV mapping puts {field} in column {}, which the header does not have (columns: {})",
-                match c {
-                    Column::Name(n) => format!("`{n}`"),
-                    Column::Index(i) => format!("#{i}"),
-                },
-                header.join(", ")
-            ),
-            hint: format!("fix the mapping: {SYNTAX}"),
-        })
-    };
-    let t_col = resolve("t", &mapping.t)?;
-    let p_cols = [
-        resolve("x", &mapping.position[0])?,
-        resolve("y", &mapping.position[1])?,
-        resolve("z", &mapping.position[2])?,
-    ];
-    let q_cols = match &mapping.orientation {
-        Some(q) => Some([
-            resolve("qx", &q[0])?,
-            resolve("qy", &q[1])?,
-            resolve("qz", &q[2])?,
-            resolve("qw", &q[3])?,
-        ]),
-        None => None,
-    };
+    let cols = ResolvedColumns::of(path, mapping, &head.columns)?;
     let file = crate::sources::input::open_text(path)?;
     let mut reader = csv::ReaderBuilder::new()
         .delimiter(head.delimiter)
@@ -275,7 +242,7 @@ pub fn read_mapped_csv_audited(
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
         .from_reader(file);
-    let mut traj = Trajectory::new(q_cols.is_some());
+    let mut traj = Trajectory::new(cols.q.is_some());
     let mut record = csv::StringRecord::new();
     loop {
         let more = reader.read_record(&mut record).map_err(|e| Error::Text {
@@ -287,6 +254,73 @@ pub fn read_mapped_csv_audited(
         if !more {
             break;
         }
+        let (stamp, p, q) = cols.pose(path, mapping.time_unit, &record)?;
+        traj.push(stamp, p, q);
+    }
+    let audit = traj.clean();
+    Ok((traj, audit))
+}
+
+/// The column index of every field of a [`CsvMapping`] in one file.
+struct ResolvedColumns {
+    t: usize,
+    p: [usize; 3],
+    q: Option<[usize; 4]>,
+}
+
+impl ResolvedColumns {
+    /// Finds each mapped column in `header` (by name, a name followed by ` [unit]`, or index); a
+    /// column the header lacks is an error naming the field, the column and the columns there are.
+    fn of(path: &Path, mapping: &CsvMapping, header: &[String]) -> Result<ResolvedColumns> {
+        let resolve = |field: &str, c: &Column| -> Result<usize> {
+            let found = match c {
+                Column::Index(i) => (*i < header.len()).then_some(*i),
+                Column::Name(n) => header.iter().position(|h| {
+                    h == n || h.split_once(" [").is_some_and(|(stem, _)| stem.trim() == n)
+                }),
+            };
+            found.ok_or_else(|| Error::Text {
+                path: path.to_path_buf(),
+                line: 1,
+                detail: format!(
+                    "the CSV mapping puts {field} in column {}, which the header does not have (columns: {})",
+                    match c {
+                        Column::Name(n) => format!("`{n}`"),
+                        Column::Index(i) => format!("#{i}"),
+                    },
+                    header.join(", ")
+                ),
+                hint: format!("fix the mapping: {SYNTAX}"),
+            })
+        };
+        Ok(ResolvedColumns {
+            t: resolve("t", &mapping.t)?,
+            p: [
+                resolve("x", &mapping.position[0])?,
+                resolve("y", &mapping.position[1])?,
+                resolve("z", &mapping.position[2])?,
+            ],
+            q: match &mapping.orientation {
+                Some(q) => Some([
+                    resolve("qx", &q[0])?,
+                    resolve("qy", &q[1])?,
+                    resolve("qz", &q[2])?,
+                    resolve("qw", &q[3])?,
+                ]),
+                None => None,
+            },
+        })
+    }
+
+    /// The pose of one record: its stamp in `unit`, position and orientation; a missing cell or one
+    /// that is not a number is an error naming the line and the column.
+    #[inline]
+    fn pose(
+        &self,
+        path: &Path,
+        unit: TimeUnit,
+        record: &csv::StringRecord,
+    ) -> Result<(i64, Vector3<f64>, Option<UnitQuaternion<f64>>)> {
         let line = record.position().map_or(0, |p| p.line() as usize);
         let bad = |detail: String| Error::Text {
             path: path.to_path_buf(),
@@ -304,13 +338,12 @@ pub fn read_mapped_csv_audited(
             c.parse::<f64>()
                 .map_err(|_| bad(format!("`{c}` in column #{i} is not a number")))
         };
-        let c = cell(t_col)?;
-        let stamp = mapping
-            .time_unit
+        let c = cell(self.t)?;
+        let stamp = unit
             .to_ns(c)
-            .ok_or_else(|| bad(format!("`{c}` in column #{t_col} is not a time")))?;
-        let p = Vector3::new(num(p_cols[0])?, num(p_cols[1])?, num(p_cols[2])?);
-        let q = match q_cols {
+            .ok_or_else(|| bad(format!("`{c}` in column #{} is not a time", self.t)))?;
+        let p = Vector3::new(num(self.p[0])?, num(self.p[1])?, num(self.p[2])?);
+        let q = match self.q {
             Some([x, y, z, w]) => Some(UnitQuaternion::from_quaternion(Quaternion::new(
                 num(w)?,
                 num(x)?,
@@ -319,10 +352,8 @@ pub fn read_mapped_csv_audited(
             ))),
             None => None,
         };
-        traj.push(stamp, p, q);
+        Ok((stamp, p, q))
     }
-    let audit = traj.clean();
-    Ok((traj, audit))
 }
 
 /// Writes `traj` as CSV with the header `t,x,y,z,qx,qy,qz,qw` (seconds, stamps printed exactly;

@@ -131,6 +131,32 @@ impl BagSource {
         Some((channels, counts))
     }
 
+    /// The records of the chunk record at byte `record_start` (header `f`, body `data`), decompressed
+    /// into `chunk` (reused from chunk to chunk): an unknown compression is its own error, a chunk
+    /// that does not decompress or split into records is damage.
+    fn open_chunk<'c>(
+        &self,
+        f: &Fields<'_>,
+        data: &[u8],
+        record_start: u64,
+        chunk: &'c mut Vec<u8>,
+    ) -> Result<Vec<(Fields<'c>, &'c [u8])>> {
+        let path = &self.path;
+        let compression = f.get("compression").unwrap_or(b"none");
+        if !matches!(compression, b"none" | b"bz2" | b"lz4") {
+            return Err(Error::UnsupportedCompression {
+                path: path.clone(),
+                offset: record_start,
+                compression: String::from_utf8_lossy(compression).into_owned(),
+            });
+        }
+        let size = f.u32("size").unwrap_or(0) as usize;
+        decompress(compression, data, size, chunk)
+            .map_err(|e| corrupt(path, format!("chunk at byte {record_start}: {e}")))?;
+        records::split_records(chunk)
+            .map_err(|d| corrupt(path, format!("chunk at byte {record_start}: {d}")))
+    }
+
     /// Hands every record of a chunk (or a top-level record) to connection/message handling.
     #[allow(clippy::too_many_arguments)]
     fn handle(
@@ -338,19 +364,7 @@ impl Recording for BagSource {
                 break;
             }
             if f.op() == Some(op::CHUNK) {
-                let compression = f.get("compression").unwrap_or(b"none");
-                if !matches!(compression, b"none" | b"bz2" | b"lz4") {
-                    return Err(Error::UnsupportedCompression {
-                        path: path.clone(),
-                        offset: record_start,
-                        compression: String::from_utf8_lossy(compression).into_owned(),
-                    });
-                }
-                let size = f.u32("size").unwrap_or(0) as usize;
-                decompress(compression, &data, size, &mut chunk)
-                    .map_err(|e| corrupt(path, format!("chunk at byte {record_start}: {e}")))?;
-                let inner = records::split_records(&chunk)
-                    .map_err(|d| corrupt(path, format!("chunk at byte {record_start}: {d}")))?;
+                let inner = self.open_chunk(&f, &data, record_start, &mut chunk)?;
                 for (f, d) in &inner {
                     self.handle(f, d, &mut conns, &mut out, &mut select, &mut on_message)?;
                 }

@@ -32,6 +32,9 @@ const PROGRESS_STEP: u64 = 1 << 20;
 /// learned about all channels. A truncated file is not an error (see [`StreamOutcome::truncated_at`]);
 /// damage elsewhere is [`Error::CorruptMcap`], a bad magic [`Error::NotMcap`], an error returned by
 /// `on_message` stops the pass and is returned as is.
+///
+/// This loop answers the reader's requests for bytes and routes each record by its opcode to
+/// `Pass`, which keeps what the records taught.
 pub fn for_each_message<S, F>(
     path: &Path,
     mut select: S,
@@ -43,31 +46,27 @@ where
     F: FnMut(&ChannelInfo, &MessageRef<'_>) -> Result<()>,
 {
     let (mut file, mut reader, magic, file_size) = open_linear(path)?;
-
-    let mut schemas: HashMap<u16, (String, String, std::sync::Arc<[u8]>)> = HashMap::new();
-    // Channel id → (index into outcome.channels, selected).
-    let mut channels: HashMap<u16, (usize, bool)> = HashMap::new();
-    let mut out = StreamOutcome {
-        bytes_read: magic.len() as u64,
-        ..Default::default()
+    let mut pass = Pass {
+        path,
+        schemas: HashMap::new(),
+        channels: HashMap::new(),
+        out: StreamOutcome {
+            bytes_read: magic.len() as u64,
+            ..Default::default()
+        },
     };
     let mut last_progress = 0u64;
-    let corrupt = |detail: String| Error::CorruptMcap {
-        path: path.to_path_buf(),
-        detail,
-    };
-
     while let Some(event) = reader.next_event() {
         let event = match event {
             Ok(event) => event,
             Err(McapError::UnexpectedEof) => {
-                out.truncated_at = Some(out.bytes_read);
+                pass.out.truncated_at = Some(pass.out.bytes_read);
                 break;
             }
             Err(e) => {
-                return Err(corrupt(format!(
+                return Err(pass.corrupt(format!(
                     "{e} (before byte {} of {file_size})",
-                    out.bytes_read
+                    pass.out.bytes_read
                 )))
             }
         };
@@ -77,91 +76,138 @@ where
                     &mut reader,
                     &mut file,
                     need,
-                    file_size.saturating_sub(out.bytes_read),
+                    file_size.saturating_sub(pass.out.bytes_read),
                 )
                 .map_err(|e| Error::io(path, e))?;
-                out.bytes_read += n as u64;
-                if out.bytes_read - last_progress >= PROGRESS_STEP {
-                    last_progress = out.bytes_read;
-                    progress(out.bytes_read);
+                pass.out.bytes_read += n as u64;
+                if pass.out.bytes_read - last_progress >= PROGRESS_STEP {
+                    last_progress = pass.out.bytes_read;
+                    progress(pass.out.bytes_read);
                 }
             }
             LinearReadEvent::Record { opcode, data } => match opcode {
-                op::MESSAGE => {
-                    // The channel id is the first field: skip unselected messages unparsed.
-                    let Some(id) = data.get(..2).map(|b| u16::from_le_bytes([b[0], b[1]])) else {
-                        return Err(corrupt(format!(
-                            "message record of {} bytes (before byte {})",
-                            data.len(),
-                            out.bytes_read
-                        )));
-                    };
-                    *out.message_counts.entry(id).or_default() += 1;
-                    let Some(&(index, true)) = channels.get(&id) else {
-                        continue;
-                    };
-                    let Record::Message { header, data } = mcap::parse_record(opcode, data)
-                        .map_err(|e| corrupt(format!("message record: {e}")))?
-                    else {
-                        continue;
-                    };
-                    let message = MessageRef {
-                        channel_id: header.channel_id,
-                        sequence: header.sequence,
-                        log_time: header.log_time,
-                        publish_time: header.publish_time,
-                        data: &data,
-                    };
-                    on_message(&out.channels[index], &message)?;
-                }
-                op::SCHEMA => {
-                    check_record(opcode, data).map_err(|d| {
-                        corrupt(format!("schema record before byte {}: {d}", out.bytes_read))
-                    })?;
-                    if let Ok(Record::Schema { header, data }) = mcap::parse_record(opcode, data) {
-                        schemas.entry(header.id).or_insert((
-                            header.name,
-                            header.encoding,
-                            data.as_ref().into(),
-                        ));
-                    }
-                }
-                op::CHANNEL => {
-                    check_record(opcode, data).map_err(|d| {
-                        corrupt(format!(
-                            "channel record before byte {}: {d}",
-                            out.bytes_read
-                        ))
-                    })?;
-                    let Record::Channel(c) = mcap::parse_record(opcode, data)
-                        .map_err(|e| corrupt(format!("channel record: {e}")))?
-                    else {
-                        continue;
-                    };
-                    if channels.contains_key(&c.id) {
-                        continue;
-                    }
-                    let (schema_name, schema_encoding, schema_data) =
-                        schemas.get(&c.schema_id).cloned().unwrap_or_default();
-                    let info = ChannelInfo {
-                        id: c.id,
-                        topic: c.topic,
-                        schema_name,
-                        schema_encoding,
-                        message_encoding: c.message_encoding,
-                        schema_data,
-                    };
-                    let selected = select(&info);
-                    channels.insert(info.id, (out.channels.len(), selected));
-                    out.channels.push(info);
-                }
+                op::MESSAGE => pass.message(data, &mut on_message)?,
+                op::SCHEMA => pass.schema(data)?,
+                op::CHANNEL => pass.channel(data, &mut select)?,
                 op::DATA_END => break,
                 _ => {}
             },
         }
     }
-    progress(out.bytes_read);
-    Ok(out)
+    progress(pass.out.bytes_read);
+    Ok(pass.out)
+}
+
+/// What one pass has learned: schema and channel names, which channels are selected, and the
+/// outcome so far (channels, message counts, bytes read).
+struct Pass<'p> {
+    path: &'p Path,
+    /// Schema id → (name, encoding, data).
+    schemas: HashMap<u16, (String, String, std::sync::Arc<[u8]>)>,
+    /// Channel id → (index into `out.channels`, selected).
+    channels: HashMap<u16, (usize, bool)>,
+    out: StreamOutcome,
+}
+
+impl Pass<'_> {
+    /// Damage in the file, as its one-line error.
+    #[cold]
+    fn corrupt(&self, detail: String) -> Error {
+        Error::CorruptMcap {
+            path: self.path.to_path_buf(),
+            detail,
+        }
+    }
+
+    /// A message record: counted, then handed to `on_message` when its channel is selected. The
+    /// channel id is the first field: unselected messages are skipped unparsed (the hot path of a
+    /// recording whose bulk is images and scans).
+    #[inline]
+    fn message<F>(&mut self, data: &[u8], on_message: &mut F) -> Result<()>
+    where
+        F: FnMut(&ChannelInfo, &MessageRef<'_>) -> Result<()>,
+    {
+        let Some(id) = data.get(..2).map(|b| u16::from_le_bytes([b[0], b[1]])) else {
+            return Err(self.corrupt(format!(
+                "message record of {} bytes (before byte {})",
+                data.len(),
+                self.out.bytes_read
+            )));
+        };
+        *self.out.message_counts.entry(id).or_default() += 1;
+        let Some(&(index, true)) = self.channels.get(&id) else {
+            return Ok(());
+        };
+        let Record::Message { header, data } = mcap::parse_record(op::MESSAGE, data)
+            .map_err(|e| self.corrupt(format!("message record: {e}")))?
+        else {
+            return Ok(());
+        };
+        let message = MessageRef {
+            channel_id: header.channel_id,
+            sequence: header.sequence,
+            log_time: header.log_time,
+            publish_time: header.publish_time,
+            data: &data,
+        };
+        on_message(&self.out.channels[index], &message)
+    }
+
+    /// A schema record: its name, encoding and text kept for the channels that name it (the first
+    /// record of an id wins).
+    fn schema(&mut self, data: &[u8]) -> Result<()> {
+        check_record(op::SCHEMA, data).map_err(|d| {
+            self.corrupt(format!(
+                "schema record before byte {}: {d}",
+                self.out.bytes_read
+            ))
+        })?;
+        if let Ok(Record::Schema { header, data }) = mcap::parse_record(op::SCHEMA, data) {
+            self.schemas.entry(header.id).or_insert((
+                header.name,
+                header.encoding,
+                data.as_ref().into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A channel record: the channel (with its schema) added to the outcome at its first record, and
+    /// `select` asked once whether its messages are wanted.
+    fn channel<S>(&mut self, data: &[u8], select: &mut S) -> Result<()>
+    where
+        S: FnMut(&ChannelInfo) -> bool,
+    {
+        check_record(op::CHANNEL, data).map_err(|d| {
+            self.corrupt(format!(
+                "channel record before byte {}: {d}",
+                self.out.bytes_read
+            ))
+        })?;
+        let Record::Channel(c) = mcap::parse_record(op::CHANNEL, data)
+            .map_err(|e| self.corrupt(format!("channel record: {e}")))?
+        else {
+            return Ok(());
+        };
+        if self.channels.contains_key(&c.id) {
+            return Ok(());
+        }
+        let (schema_name, schema_encoding, schema_data) =
+            self.schemas.get(&c.schema_id).cloned().unwrap_or_default();
+        let info = ChannelInfo {
+            id: c.id,
+            topic: c.topic,
+            schema_name,
+            schema_encoding,
+            message_encoding: c.message_encoding,
+            schema_data,
+        };
+        let selected = select(&info);
+        self.channels
+            .insert(info.id, (self.out.channels.len(), selected));
+        self.out.channels.push(info);
+        Ok(())
+    }
 }
 
 /// Opens `path` and a [`LinearReader`] over it that has already consumed the magic: the one way every

@@ -17,45 +17,9 @@ pub fn for_each_message(
     selected: &[bool],
     on_message: OnMessage<'_>,
 ) -> Result<()> {
-    let bad = |e: rusqlite::Error| Error::Rosbag2 {
-        path: path.to_path_buf(),
-        detail: format!("sqlite3: {e}; check the file with `ros2 bag info`"),
-    };
-    // URI form so `immutable=1` applies; the characters URIs reserve are escaped.
-    let escaped: String = path
-        .to_string_lossy()
-        .chars()
-        .map(|c| match c {
-            '%' => "%25".to_string(),
-            '?' => "%3f".to_string(),
-            '#' => "%23".to_string(),
-            c => c.to_string(),
-        })
-        .collect();
-    let db = rusqlite::Connection::open_with_flags(
-        format!("file:{escaped}?immutable=1"),
-        rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY | rusqlite::OpenFlags::SQLITE_OPEN_URI,
-    )
-    .map_err(bad)?;
-    // Database topic id → channel index.
-    let by_name: HashMap<&str, usize> = channels
-        .iter()
-        .enumerate()
-        .map(|(i, c)| (c.topic.as_str(), i))
-        .collect();
-    let mut route: HashMap<i64, usize> = HashMap::new();
-    {
-        let mut stmt = db.prepare("SELECT id, name FROM topics").map_err(bad)?;
-        let rows = stmt
-            .query_map([], |r| Ok((r.get::<_, i64>(0)?, r.get::<_, String>(1)?)))
-            .map_err(bad)?;
-        for row in rows {
-            let (id, name) = row.map_err(bad)?;
-            if let Some(&i) = by_name.get(name.as_str()).filter(|&&i| selected[i]) {
-                route.insert(id, i);
-            }
-        }
-    }
+    let bad = |e: rusqlite::Error| sqlite_error(path, e);
+    let db = open_immutable(path)?;
+    let route = routes(&db, channels, selected).map_err(bad)?;
     if route.is_empty() {
         return Ok(());
     }
@@ -91,4 +55,56 @@ pub fn for_each_message(
         )?;
     }
     Ok(())
+}
+
+/// A database error as the one-line error of `path`.
+fn sqlite_error(path: &Path, e: rusqlite::Error) -> Error {
+    Error::Rosbag2 {
+        path: path.to_path_buf(),
+        detail: format!("sqlite3: {e}; check the file with `ros2 bag info`"),
+    }
+}
+
+/// Opens the database read-only and `immutable` (no journal, no lock file, nothing written).
+fn open_immutable(path: &Path) -> Result<rusqlite::Connection> {
+    // URI form so `immutable=1` applies; the characters URIs reserve are escaped.
+    let escaped: String = path
+        .to_string_lossy()
+        .chars()
+        .map(|c| match c {
+            '%' => "%25".to_string(),
+            '?' => "%3f".to_string(),
+            '#' => "%23".to_string(),
+            c => c.to_string(),
+        })
+        .collect();
+    rusqlite::Connection::open_with_flags(
+        format!("file:{escaped}?immutable=1"),
+        rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY | rusqlite::OpenFlags::SQLITE_OPEN_URI,
+    )
+    .map_err(|e| sqlite_error(path, e))
+}
+
+/// Database topic id → index into `channels`, for the selected channels only (matched by topic
+/// name: the database's ids are its own).
+fn routes(
+    db: &rusqlite::Connection,
+    channels: &[ChannelInfo],
+    selected: &[bool],
+) -> rusqlite::Result<HashMap<i64, usize>> {
+    let by_name: HashMap<&str, usize> = channels
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (c.topic.as_str(), i))
+        .collect();
+    let mut route: HashMap<i64, usize> = HashMap::new();
+    let mut stmt = db.prepare("SELECT id, name FROM topics")?;
+    let rows = stmt.query_map([], |r| Ok((r.get::<_, i64>(0)?, r.get::<_, String>(1)?)))?;
+    for row in rows {
+        let (id, name) = row?;
+        if let Some(&i) = by_name.get(name.as_str()).filter(|&&i| selected[i]) {
+            route.insert(id, i);
+        }
+    }
+    Ok(route)
 }
