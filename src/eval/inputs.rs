@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::eval::config::{EvalConfig, LeverSpec, NamedInput, TrajectoryInput};
 use crate::sources::text::{read_text_audited, TextOptions};
 use crate::sources::tf_chain::parse_chain_topic;
-use crate::sources::{ExtractOptions, Progress, Warning};
+use crate::sources::{ExtractOptions, Extraction, Progress, Warning};
 use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
@@ -121,28 +121,55 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
             }
         }
     }
-    let mut extraction = None;
-    let (path, bytes) = match &config.recording {
+    let (extraction, path, bytes) = extract(config, &topics, &lookups, progress)?;
+    let mut loaded = Vec::with_capacity(all.len());
+    for &input in &all {
+        loaded.push(loaded_input(config, input, extraction.as_ref())?);
+    }
+    for ((l, input), spec) in loaded.iter_mut().zip(&all).zip(&specs) {
+        l.lever_m = lever_of(config, input, *spec, extraction.as_ref())?;
+    }
+    let reference = loaded.remove(0);
+    Ok(Inputs {
+        reference,
+        estimates: loaded,
+        warnings: extraction.map(|e| e.warnings).unwrap_or_default(),
+        path,
+        bytes,
+    })
+}
+
+/// One pass over the recording for the requested topics and `/tf_static` look-ups (none when
+/// every input is a text file); with the input's path and size for the report.
+fn extract(
+    config: &EvalConfig,
+    topics: &[String],
+    lookups: &[(String, String)],
+    progress: Progress<'_>,
+) -> Result<(Option<Extraction>, String, u64)> {
+    match &config.recording {
         Some(rec) => {
             let source = crate::sources::open_all(&config.recordings())?;
-            if !topics.is_empty() {
-                let mut unique = topics.clone();
+            let extraction = if !topics.is_empty() {
+                let mut unique = topics.to_vec();
                 unique.dedup();
                 let options = ExtractOptions {
                     stamp: config.params.stamp(),
                     origin: config.params.origin,
-                    static_lookups: lookups.clone(),
+                    static_lookups: lookups.to_vec(),
                     positions_only: positions_only(config, source.as_ref()),
                 };
-                extraction = Some(source.extract(&unique, &options, progress)?);
+                Some(source.extract(&unique, &options, progress)?)
             } else if !lookups.is_empty() {
                 let options = ExtractOptions {
-                    static_lookups: lookups.clone(),
+                    static_lookups: lookups.to_vec(),
                     ..ExtractOptions::default()
                 };
-                extraction = Some(source.extract(&[], &options, progress)?);
-            }
-            (rec.display().to_string(), source.size_bytes())
+                Some(source.extract(&[], &options, progress)?)
+            } else {
+                None
+            };
+            Ok((extraction, rec.display().to_string(), source.size_bytes()))
         }
         None => {
             let p = match &config.reference.input {
@@ -154,65 +181,66 @@ pub fn load(config: &EvalConfig, progress: Progress<'_>) -> Result<Inputs> {
                 }
             };
             let bytes = std::fs::metadata(&p).map_err(|e| Error::io(&p, e))?.len();
-            (p.display().to_string(), bytes)
+            Ok((None, p.display().to_string(), bytes))
         }
-    };
-    let mut loaded = Vec::with_capacity(all.len());
-    for &input in &all {
-        loaded.push(match &input.input {
-            TrajectoryInput::TumFile(p) => load_tum(&input.name, p, &config.text)?,
-            TrajectoryInput::Topic(t) => {
-                let ex = extraction
-                    .as_ref()
-                    .and_then(|e| e.topics.iter().find(|x| &x.topic == t))
-                    .ok_or_else(|| {
-                        Error::InvalidArgument(format!("topic {t} was not extracted"))
-                    })?;
-                Loaded {
-                    name: input.name.clone(),
-                    label: t.clone(),
-                    type_name: ex.type_name.clone(),
-                    trajectory: ex.trajectory.clone(),
-                    dropped_samples: ex.invalid_dropped + ex.duplicate_stamps,
-                    rows: ex.rows,
-                    geodetic_origin: ex.geodetic_origin,
-                    lever_m: None,
-                }
-            }
-        });
     }
-    for ((l, input), spec) in loaded.iter_mut().zip(&all).zip(&specs) {
-        l.lever_m = match spec {
-            None => None,
-            Some(LeverSpec::Offset(v)) => Some(*v),
-            Some(spec) => {
-                let (from, to) = static_lookup(config, input, Some(spec))?.unwrap_or_default();
-                let found = extraction
-                    .as_ref()
-                    .and_then(|e| {
-                        e.static_transforms
-                            .iter()
-                            .find(|s| s.from == from && s.to == to)
-                    })
-                    .map(|s| s.pose.clone())
-                    .unwrap_or_else(|| Err("no look-up was made".into()));
-                let pose = found.map_err(|detail| Error::TfChain {
-                    path: config.recording.clone().unwrap_or_default(),
-                    topic: format!("{} {}", lever_flag(config, input), spec.describe()),
-                    detail,
-                })?;
-                let t = pose.translation.vector;
-                Some([t.x, t.y, t.z])
+}
+
+/// One input: read from its text file, or taken from the recording's extraction.
+fn loaded_input(
+    config: &EvalConfig,
+    input: &NamedInput,
+    extraction: Option<&Extraction>,
+) -> Result<Loaded> {
+    Ok(match &input.input {
+        TrajectoryInput::TumFile(p) => load_tum(&input.name, p, &config.text)?,
+        TrajectoryInput::Topic(t) => {
+            let ex = extraction
+                .and_then(|e| e.topics.iter().find(|x| &x.topic == t))
+                .ok_or_else(|| Error::InvalidArgument(format!("topic {t} was not extracted")))?;
+            Loaded {
+                name: input.name.clone(),
+                label: t.clone(),
+                type_name: ex.type_name.clone(),
+                trajectory: ex.trajectory.clone(),
+                dropped_samples: ex.invalid_dropped + ex.duplicate_stamps,
+                rows: ex.rows,
+                geodetic_origin: ex.geodetic_origin,
+                lever_m: None,
             }
-        };
-    }
-    let reference = loaded.remove(0);
-    Ok(Inputs {
-        reference,
-        estimates: loaded,
-        warnings: extraction.map(|e| e.warnings).unwrap_or_default(),
-        path,
-        bytes,
+        }
+    })
+}
+
+/// An input's lever: as given, or the translation of the `/tf_static` transform its
+/// `tf-static:` spec names.
+fn lever_of(
+    config: &EvalConfig,
+    input: &NamedInput,
+    spec: Option<&LeverSpec>,
+    extraction: Option<&Extraction>,
+) -> Result<Option<[f64; 3]>> {
+    Ok(match spec {
+        None => None,
+        Some(LeverSpec::Offset(v)) => Some(*v),
+        Some(spec) => {
+            let (from, to) = static_lookup(config, input, Some(spec))?.unwrap_or_default();
+            let found = extraction
+                .and_then(|e| {
+                    e.static_transforms
+                        .iter()
+                        .find(|s| s.from == from && s.to == to)
+                })
+                .map(|s| s.pose.clone())
+                .unwrap_or_else(|| Err("no look-up was made".into()));
+            let pose = found.map_err(|detail| Error::TfChain {
+                path: config.recording.clone().unwrap_or_default(),
+                topic: format!("{} {}", lever_flag(config, input), spec.describe()),
+                detail,
+            })?;
+            let t = pose.translation.vector;
+            Some([t.x, t.y, t.z])
+        }
     })
 }
 
