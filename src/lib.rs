@@ -11,9 +11,25 @@ pub use trajdrift_core::{
 };
 pub use trajdrift_core::{Error, Result, Trajectory};
 
+// The API for programs (the Python package stands on these names only): see [`api`].
+pub use api::{
+    ape, drift_error, evaluate, evaluate_trajectories, read, rpe, time_offset, Alignment,
+    AlignmentReport, CsvMapping, DeltaReport, DeltaUnit, ErrorStats, EvalConfig, EvalRequest,
+    LeverSpec, MetricOptions, MetricResult, NamedInput, NamedTrajectory, PairSelection, ParamSpec,
+    Parameters, Pipeline, Plane, PoseRelation, Poses, ReadOptions, Rotations, StampSeconds,
+    StampSource, StandardResult, SyncMethod, TextFormat, TextOptions, TrajectoryInput,
+    TrajectoryRead, SPECS,
+};
+pub use trajdrift_core::diag::Warning;
+pub use trajdrift_core::report::json::{
+    DriftErrorReport, EstimateReport, MethodStatus, OffsetSource, Report, TimeOffsetReport,
+    TimeOffsetStatus,
+};
+
 extern crate self as trajdrift;
 
 pub mod annotate;
+pub mod api;
 pub mod batch;
 pub mod cli;
 pub mod eval;
