@@ -38,10 +38,26 @@ pub use crate::metrics::standard::{
     Alignment, AlignmentReport, DeltaReport, DeltaUnit, ErrorStats, MetricResult, PairSelection,
     Pipeline, Plane, PoseRelation, Poses, StampSeconds, SyncMethod,
 };
-pub use crate::params::{ParamSpec, Parameters, SPECS};
+pub use crate::params::{ParamSpec, Parameters, ValueKind, SPECS};
 pub use crate::sources::mapped_csv::CsvMapping;
 pub use crate::sources::text::{TextFormat, TextOptions};
 pub use crate::sources::StampSource;
+
+/// The one-line message the command line prints after `error: ` for `e`: each cause said once, control
+/// characters from file names escaped.
+pub fn error_message(e: &Error) -> String {
+    let mut line = e.to_string();
+    let mut cause = std::error::Error::source(e);
+    while let Some(c) = cause {
+        let text = c.to_string();
+        if !line.contains(&text) {
+            line.push_str(": ");
+            line.push_str(&text);
+        }
+        cause = c.source();
+    }
+    crate::report::escape::escape_line(&line)
+}
 
 /// How [`read`] reads a source.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -58,7 +74,10 @@ pub struct ReadOptions {
 /// A trajectory [`read`] from a recording or a file, with what is known of its source.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TrajectoryRead {
-    /// Stamps sorted, a repeated stamp dropped (counted in `rows`), orientations when the source has them.
+    /// The stamps, positions and (when the source has them) orientations. From a recording, or a
+    /// EuRoC, CSV or KITTI file: sorted by stamp, a repeated stamp or a row not finite dropped (counted
+    /// in `rows`). From a TUM file: its rows as written, as evo reads them (the evaluation sorts them
+    /// and drops the repeats itself; `rows` says how many).
     pub trajectory: Trajectory,
     /// The name an evaluation gives it: the topic without its leading `/`, or the file stem.
     pub name: String,
@@ -185,7 +204,18 @@ fn trajectory_topics(paths: &[PathBuf]) -> String {
 
 /// One text trajectory file, with evo's stamp conversion for its format.
 fn read_file(path: &Path, text: &TextOptions) -> Result<TrajectoryRead> {
-    let (trajectory, format, rows) = read_text_audited(path, text)?;
+    let format = match text.format {
+        Some(f) => f,
+        None => crate::sources::text::detect_format(path)?,
+    };
+    let (trajectory, format, rows) = if format == TextFormat::Tum {
+        // The rows as written, as evo reads them; `rows` counts what an evaluation sorts or drops.
+        let trajectory = crate::sources::tum::read_tum_rows(path)?;
+        let rows = trajectory.clone().clean();
+        (trajectory, format, rows)
+    } else {
+        read_text_audited(path, text)?
+    };
     let (stamp_seconds, rotation_matrices) = match format {
         TextFormat::Kitti => (
             text.kitti_times.as_ref().map(|_| StampSeconds::Decimal),

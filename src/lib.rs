@@ -13,13 +13,15 @@ pub use trajdrift_core::{Error, Result, Trajectory};
 
 // The API for programs (the Python package stands on these names only): see [`api`].
 pub use api::{
-    ape, drift_error, evaluate, evaluate_trajectories, read, rpe, time_offset, Alignment,
-    AlignmentReport, CsvMapping, DeltaReport, DeltaUnit, ErrorStats, EvalConfig, EvalRequest,
-    LeverSpec, MetricOptions, MetricResult, NamedInput, NamedTrajectory, PairSelection, ParamSpec,
-    Parameters, Pipeline, Plane, PoseRelation, Poses, ReadOptions, Rotations, StampSeconds,
-    StampSource, StandardResult, SyncMethod, TextFormat, TextOptions, TrajectoryInput,
-    TrajectoryRead, SPECS,
+    ape, drift_error, error_message, evaluate, evaluate_trajectories, read, rpe, time_offset,
+    Alignment, AlignmentReport, CsvMapping, DeltaReport, DeltaUnit, ErrorStats, EvalConfig,
+    EvalRequest, LeverSpec, MetricOptions, MetricResult, NamedInput, NamedTrajectory,
+    PairSelection, ParamSpec, Parameters, Pipeline, Plane, PoseRelation, Poses, ReadOptions,
+    Rotations, StampSeconds, StampSource, StandardResult, SyncMethod, TextFormat, TextOptions,
+    TrajectoryInput, TrajectoryRead, ValueKind, SPECS,
 };
+/// The command line, in process: what the `trajdrift` binary runs (see [`cli::main_with_args`]).
+pub use cli::main_with_args;
 pub use trajdrift_core::diag::Warning;
 pub use trajdrift_core::report::json::{
     DriftErrorReport, EstimateReport, MethodStatus, OffsetSource, Report, TimeOffsetReport,
