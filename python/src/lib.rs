@@ -433,7 +433,8 @@ fn named_input(name: Option<String>, kind: &str, value: String) -> PyResult<Name
     Ok(input)
 }
 
-/// `trajdrift.evaluate` on recordings and files: the command line's `eval`, its JSON report.
+/// `trajdrift.evaluate` on recordings and files: the command line's `eval`, its JSON report, and the
+/// notes the command line prints (a preset's estimate absent from the recording, skipped).
 #[pyfunction]
 #[pyo3(signature = (recordings, reference, estimates, preset=None, parameters_=None, text_format=None, csv=None, kitti_times=None, reference_lever=None, estimate_levers=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
@@ -449,7 +450,7 @@ fn evaluate(
     kitti_times: Option<PathBuf>,
     reference_lever: Option<String>,
     estimate_levers: Vec<(Option<String>, String)>,
-) -> PyResult<String> {
+) -> PyResult<(String, Vec<String>)> {
     let request = EvalRequest {
         recordings,
         reference: reference
@@ -472,13 +473,13 @@ fn evaluate(
             .collect::<trajdrift::Result<_>>()
             .map_err(py_error)?,
     };
-    let report = py
+    let (report, notes) = py
         .detach(|| {
-            let (config, _notes) = request.config()?;
-            trajdrift::evaluate(&config)
+            let (config, notes) = request.config()?;
+            trajdrift::evaluate(&config).map(|report| (report, notes))
         })
         .map_err(py_error)?;
-    to_json(&report)
+    Ok((to_json(&report)?, notes))
 }
 
 fn to_json<T: serde::Serialize>(v: &T) -> PyResult<String> {

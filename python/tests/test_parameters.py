@@ -92,3 +92,20 @@ def test_metric_errors():
         trajdrift.ape(ref, est, pose_relation="speed")
     with pytest.raises(trajdrift.UsageError, match="-u x"):
         trajdrift.rpe(ref, est, delta_unit="x")
+
+
+def test_a_presets_absent_estimate_is_a_warning_as_on_the_command_line(tmp_path):
+    preset = tmp_path / "preset.toml"
+    preset.write_text(
+        'name = "mine"\ndescription = "a test preset"\nrobot = "wheeled"\n'
+        '[reference]\ntopics = ["/reference/position"]\n'
+        '[[estimate]]\nname = "lio"\ntopics = ["/estimate/odom"]\n'
+        '[[estimate]]\nname = "leg"\ntopics = ["/estimate/legs"]\n'
+    )
+    r = run_cli("eval", str(FIXTURE), "--preset", str(preset), "--json", str(tmp_path / "r.json"))
+    note = [l for l in r.stderr.splitlines() if l.startswith("note: ")]
+    assert r.returncode in (0, 3) and note, r.stderr
+    with pytest.warns(UserWarning) as w:
+        report = trajdrift.evaluate(FIXTURE, preset=str(preset))
+    assert [str(x.message) for x in w] == [n[len("note: "):] for n in note]
+    assert list(report.estimates) == ["lio"]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import difflib
 import json
 import os
+import warnings
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union, overload
 
 from . import _trajdrift
@@ -136,7 +137,9 @@ def evaluate(
     - ``text_format``, ``csv``, ``kitti_times``: how text files are read (see :func:`read`).
 
     A bad parameter value raises :class:`trajdrift.UsageError` (a ``ValueError``) with the command
-    line's message; an unknown parameter a ``TypeError``. Warnings are in ``Report.warnings``.
+    line's message; an unknown parameter a ``TypeError``. Warnings are in ``Report.warnings``; a
+    preset's estimate absent from the recording is skipped with a ``UserWarning`` (the command line's
+    ``note:``).
     """
     params = _check_keys(parameters, "evaluate")
     named = _named_estimates(estimates)
@@ -150,21 +153,22 @@ def evaluate(
             levers = [(str(k), _lever(v)) for k, v in estimate_lever.items()]
         elif estimate_lever is not None:
             levers = [(None, _lever(estimate_lever))]
-        text = json.loads(
-            _trajdrift.evaluate(
-                recordings,
-                None if reference is None else (None, kind, os.fspath(reference)),
-                [(n, kind, os.fspath(e)) for n, e in named],
-                preset,
-                params,
-                text_format,
-                csv,
-                None if kitti_times is None else os.fspath(kitti_times),
-                None if reference_lever is None else _lever(reference_lever),
-                levers,
-            )
+        text, notes = _trajdrift.evaluate(
+            recordings,
+            None if reference is None else (None, kind, os.fspath(reference)),
+            [(n, kind, os.fspath(e)) for n, e in named],
+            preset,
+            params,
+            text_format,
+            csv,
+            None if kitti_times is None else os.fspath(kitti_times),
+            None if reference_lever is None else _lever(reference_lever),
+            levers,
         )
-        return Report(text)
+        # What the command line prints as `note:` (a preset's estimate absent from the recording).
+        for note in notes:
+            warnings.warn(note, stacklevel=2)
+        return Report(json.loads(text))
     if preset is not None:
         raise TypeError("preset picks topics of a recording; it does not apply to trajectories in memory")
     if reference is None:
