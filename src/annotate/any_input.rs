@@ -33,10 +33,22 @@ pub fn profile(channels: &[ChannelInfo]) -> &'static str {
     }
 }
 
-/// Copies every message of `rec` (none when `None`) into a new MCAP on `out`, calling `annotations`
-/// along the way. Returns the sink (to flush and sync).
+/// What [`copy_recording`] copies.
+#[derive(Clone, Copy)]
+pub enum CopyInput<'a> {
+    /// No recording (text trajectories): the annotations alone.
+    Nothing,
+    /// One recording (a mission read as one is one too: its files are not told apart).
+    One(&'a dyn Recording),
+    /// A mission whose files are told apart: each message's file index goes to
+    /// [`Annotations::rewrite`].
+    Parts(&'a crate::sources::mission::Mission),
+}
+
+/// Copies every message of `input` into a new MCAP on `out`, calling `annotations` along the way.
+/// Returns the sink (to flush and sync).
 pub fn copy_recording<W: Write + Seek, A: Annotations<W>>(
-    rec: Option<&dyn Recording>,
+    input: CopyInput<'_>,
     out: W,
     output_path: &Path,
     options: mcap::WriteOptions,
@@ -51,12 +63,15 @@ pub fn copy_recording<W: Write + Seek, A: Annotations<W>>(
     let mut w: Writer<W> = options.profile(profile).create(out).map_err(write_err)?;
     annotations.start(&mut w)?;
     let mut outcome = CopyOutcome::default();
-    if let Some(rec) = rec {
+    if !matches!(input, CopyInput::Nothing) {
         // (name, encoding, text) → schema id, counting up from 1 (the annotations count down).
         let mut schemas: HashMap<(String, String, Vec<u8>), u16> = HashMap::new();
         let mut channels: HashMap<u16, InputChannel> = HashMap::new();
         let mut sequences: HashMap<u16, u32> = HashMap::new();
-        let o = rec.pass(&mut |_| true, progress, &mut |c, m| {
+        let mut on_message = |part: usize,
+                              c: &ChannelInfo,
+                              m: &crate::sources::recording::MessageRef<'_>|
+         -> Result<()> {
             let channel = match channels.entry(c.id) {
                 Entry::Occupied(e) => e.into_mut(),
                 Entry::Vacant(e) => {
@@ -74,6 +89,8 @@ pub fn copy_recording<W: Write + Seek, A: Annotations<W>>(
                         schema_id,
                         topic: c.topic.clone(),
                         message_encoding: c.message_encoding.clone(),
+                        schema_name: c.schema_name.clone(),
+                        schema_data: c.schema_data.clone(),
                     })
                 }
             };
@@ -87,13 +104,31 @@ pub fn copy_recording<W: Write + Seek, A: Annotations<W>>(
                 publish_time: m.publish_time,
             };
             annotations.before_message(&mut w, channel, &header, m.data)?;
-            w.write_to_known_channel(&header, m.data)
-                .map_err(write_err)?;
+            let log_time = match annotations.rewrite(part, channel, &header, m.data)? {
+                Some((h, d)) => {
+                    w.write_to_known_channel(&h, &d).map_err(write_err)?;
+                    h.log_time
+                }
+                None => {
+                    w.write_to_known_channel(&header, m.data)
+                        .map_err(write_err)?;
+                    m.log_time
+                }
+            };
             outcome.messages += 1;
-            outcome.last_log_time = outcome.last_log_time.max(m.log_time);
+            outcome.last_log_time = outcome.last_log_time.max(log_time);
             Ok(())
-        })?;
-        outcome.truncated_at = o.truncated_at;
+        };
+        let o = match input {
+            CopyInput::One(rec) => {
+                Some(rec.pass(&mut |_| true, progress, &mut |c, m| on_message(0, c, m))?)
+            }
+            CopyInput::Parts(mission) => {
+                Some(mission.pass_parts(&mut |_| true, progress, &mut on_message)?)
+            }
+            CopyInput::Nothing => None,
+        };
+        outcome.truncated_at = o.and_then(|o| o.truncated_at);
     }
     annotations.finish(&mut w)?;
     w.finish().map_err(write_err)?;

@@ -1,0 +1,517 @@
+//! `trajdrift audit`: the clock map of a whole mission, and `trajdrift restamp`: a copy with its
+//! clocks fixed.
+//!
+//! A curated dataset needs, per source, which clock it is on (offset, drifting, stepping), where its
+//! sensor sits relative to the others, and which sources disagree. The audit answers it from one
+//! streaming pass over every file of the mission ([`crate::eval::inputs::load`] reads every source at
+//! once), then evaluates every pair of sources on the loaded trajectories with the evaluation itself
+//! ([`pairs`]: the offset search, σ, clock model — so the audit gets whatever the evaluation knows),
+//! and builds on those results:
+//!
+//! - [`discover`]: which topics are sources, which is the reference, which file each came from;
+//! - [`pairs`]: the offset of every overlapping pair;
+//! - [`coverage`]: rate, gaps and coverage of each source;
+//! - [`lever`]: each source's lever arm (a 3-D fit with Δt from its orientation, or lateral and
+//!   forward from positions);
+//! - [`closure`]: Δt_AB + Δt_BC − Δt_AC of every triple with its σ and a χ² test, naming a source
+//!   out of line;
+//! - [`domains`]: sources grouped by clock;
+//! - [`report`]: the result and its JSON (`schemas/audit.schema.json`), [`table`] and [`html`] its text
+//!   and page;
+//! - [`restamp_plan`] and [`restamp`]: which messages move by which clock, and the copy that moves them.
+//!
+//! Layering: above `eval`, `annotate` (the copier `restamp` reuses), `plot` and `render`; below `batch`.
+
+pub mod closure;
+pub mod coverage;
+pub mod discover;
+pub mod domains;
+pub mod html;
+pub mod lever;
+pub mod pairs;
+pub mod report;
+pub mod restamp;
+pub mod restamp_plan;
+pub mod table;
+
+use std::path::PathBuf;
+
+use crate::clock::ClockCorrection;
+use crate::diag::{Warning, WarningCode};
+use crate::error::{Error, Result};
+use crate::eval::config::EvalConfig;
+use crate::eval::inputs::{load, Loaded};
+use crate::eval::parameters::Parameters;
+use crate::report::json::{EstimateReport, Report, TimeOffsetStatus, Tool};
+use crate::sources::Progress;
+use crate::trajectory::Trajectory;
+use discover::{discover, Discovered, SourceRequest};
+use report::{
+    AuditReport, Clock, Closure, Domain, OutOfLine, OutOfLineReason, PairOffset, SourceAudit,
+    AUDIT_KIND, AUDIT_SCHEMA_VERSION,
+};
+
+/// What to audit.
+#[derive(Debug, Clone, Default)]
+pub struct AuditConfig {
+    /// The recording: one file, several files of one mission, or a mission folder.
+    pub recordings: Vec<PathBuf>,
+    pub request: SourceRequest,
+    /// Evaluation parameters (every pair is evaluated with them).
+    pub params: Parameters,
+}
+
+/// An audit and the trajectories it was computed from (for figures).
+#[derive(Debug, Clone)]
+pub struct AuditOutcome {
+    pub report: AuditReport,
+    /// Per source (the reference first), its trajectory on its own clock.
+    pub trajectories: Vec<(String, Trajectory)>,
+    /// What the user should know about choices made (the reference picked, …).
+    pub notes: Vec<String>,
+}
+
+/// The evaluation's request for every source at once (one pass), keeping orientations (the lever
+/// fit reads them).
+fn eval_config(config: &AuditConfig, d: &Discovered) -> EvalConfig {
+    let mut c = EvalConfig::new(
+        config.recordings.first().cloned(),
+        d.reference.clone(),
+        d.sources.clone(),
+    );
+    c.more_recordings = config.recordings.iter().skip(1).cloned().collect();
+    c.params = config.params.clone();
+    c.keep_orientations = true;
+    c
+}
+
+/// `--t-start`/`--t-end` below 1e8 count from the reference's first sample: made absolute here, since
+/// each pair is evaluated against its own first source.
+fn absolute_crop(params: &mut Parameters, reference: &Trajectory) {
+    let t0 = reference.stamps_ns.first().copied().unwrap_or(0) as f64 * 1e-9;
+    for v in [&mut params.t_start, &mut params.t_end]
+        .into_iter()
+        .flatten()
+    {
+        if v.abs() < 1e8 {
+            *v += t0;
+        }
+    }
+}
+
+/// Runs the audit.
+pub fn audit(config: &AuditConfig, progress: Progress<'_>) -> Result<AuditOutcome> {
+    let found = discover(&config.recordings, &config.request)?;
+    let mut eval = eval_config(config, &found);
+    eval.validate()?;
+    let inputs = load(&eval, progress)?;
+    let read_warnings = inputs.warnings.clone();
+    let mut sources: Vec<Loaded> = Vec::with_capacity(inputs.estimates.len() + 1);
+    sources.push(inputs.reference);
+    sources.extend(inputs.estimates);
+    absolute_crop(&mut eval.params, &sources[0].trajectory);
+    let evaluations = pairs::evaluate_pairs(&eval, &sources);
+    let report = build(config, &found, &sources, &evaluations, read_warnings)?;
+    Ok(AuditOutcome {
+        report,
+        trajectories: sources
+            .into_iter()
+            .map(|s| (s.name, s.trajectory))
+            .collect(),
+        notes: found.notes,
+    })
+}
+
+/// The evaluation report of every source against the reference, merged from the reference's pairs.
+fn merged_evaluation(
+    sources: &[Loaded],
+    evaluations: &[pairs::PairEvaluation],
+    warnings: &[Warning],
+) -> Result<Report> {
+    let mut template: Option<Report> = None;
+    let mut estimates = Vec::new();
+    let mut all_warnings = warnings.to_vec();
+    let mut first_error = None;
+    for e in evaluations.iter().filter(|e| e.a == 0) {
+        match &e.result {
+            Ok((est, report)) => {
+                estimates.push(est.clone());
+                all_warnings.extend(report.warnings.iter().cloned());
+                template.get_or_insert_with(|| report.clone());
+            }
+            Err(msg) => {
+                first_error.get_or_insert_with(|| format!("{}: {msg}", sources[e.b].name));
+            }
+        }
+    }
+    let Some(mut report) = template else {
+        return Err(Error::InvalidArgument(format!(
+            "no source could be evaluated against the reference {}: {}",
+            sources[0].label,
+            first_error.unwrap_or_default()
+        )));
+    };
+    report.estimates = estimates;
+    report.warnings = all_warnings;
+    Ok(report)
+}
+
+/// The span of a trajectory, absolute seconds on its own clock.
+fn span_s(t: &Trajectory) -> (f64, f64) {
+    t.span_ns()
+        .map_or((0.0, 0.0), |(a, b)| (a as f64 * 1e-9, b as f64 * 1e-9))
+}
+
+fn build(
+    config: &AuditConfig,
+    found: &Discovered,
+    sources: &[Loaded],
+    evaluations: &[pairs::PairEvaluation],
+    read_warnings: Vec<Warning>,
+) -> Result<AuditReport> {
+    let evaluation = merged_evaluation(sources, evaluations, &read_warnings)?;
+    let n = sources.len();
+    let reference_span = span_s(&sources[0].trajectory);
+    let pair_report = |a: usize, b: usize| -> Option<&EstimateReport> {
+        evaluations
+            .iter()
+            .find(|e| e.a == a && e.b == b)
+            .and_then(|e| e.result.as_ref().ok().map(|(r, _)| r))
+    };
+    // Each source's clock against the reference, with the span it covers on the reference clock.
+    let mut clocks: Vec<Option<Clock>> =
+        vec![Some(Clock::reference(reference_span.0, reference_span.1))];
+    for b in 1..n {
+        clocks.push(pair_report(0, b).map(|r| {
+            let c = ClockCorrection::from_report(&r.time_offset);
+            let cov = coverage::coverage(&sources[b].trajectory, &c, reference_span);
+            Clock::from_time_offset(
+                &r.time_offset,
+                (
+                    cov.t_start.max(reference_span.0),
+                    cov.t_end.min(reference_span.1),
+                ),
+            )
+        }));
+    }
+    // Every measured pair.
+    let mut pair_list = Vec::new();
+    let mut pair_clock: Vec<Vec<Option<Clock>>> = vec![vec![None; n]; n];
+    for e in evaluations {
+        let Ok((r, _)) = &e.result else { continue };
+        let span = (
+            span_s(&sources[e.a].trajectory)
+                .0
+                .max(span_s(&sources[e.b].trajectory).0),
+            span_s(&sources[e.a].trajectory)
+                .1
+                .min(span_s(&sources[e.b].trajectory).1),
+        );
+        let clock = if e.a == 0 {
+            clocks[e.b]
+                .clone()
+                .unwrap_or_else(|| Clock::from_time_offset(&r.time_offset, span))
+        } else {
+            Clock::from_time_offset(&r.time_offset, span)
+        };
+        pair_clock[e.a][e.b] = Some(clock.clone());
+        pair_list.push(PairOffset {
+            a: sources[e.a].name.clone(),
+            b: sources[e.b].name.clone(),
+            clock,
+            overlap_s: e.overlap_s,
+        });
+    }
+    let pair = |a: usize, b: usize| pair_clock[a.min(b)][a.max(b)].clone();
+    // Closure of every triple whose three pairs were measured.
+    let mut closures = Vec::new();
+    let mut triples = Vec::new();
+    for a in 0..n {
+        for b in a + 1..n {
+            for c in b + 1..n {
+                let (Some(ab), Some(bc), Some(ac)) = (pair(a, b), pair(b, c), pair(a, c)) else {
+                    continue;
+                };
+                let spans = [a, b, c].map(|i| span_s(&sources[i].trajectory));
+                let span = (
+                    spans.iter().map(|s| s.0).fold(f64::NEG_INFINITY, f64::max),
+                    spans.iter().map(|s| s.1).fold(f64::INFINITY, f64::min),
+                );
+                let usable = |c: &Clock| {
+                    c.status == TimeOffsetStatus::Ok || c.status == TimeOffsetStatus::Given
+                };
+                if !(usable(&ab) && usable(&bc) && usable(&ac)) {
+                    continue;
+                }
+                let Some(stat) = closure::closure(&ab, &bc, &ac, span) else {
+                    continue;
+                };
+                triples.push(([a, b, c], stat.consistent));
+                closures.push(Closure {
+                    sources: [a, b, c].map(|i| sources[i].name.clone()),
+                    residual_s: stat.residual_s,
+                    sigma_s: stat.sigma_s,
+                    chi2: stat.chi2,
+                    dof: stat.dof,
+                    p_value: stat.p_value,
+                    consistent: stat.consistent,
+                });
+            }
+        }
+    }
+    // Domains.
+    let sigmas: Vec<Option<f64>> = clocks
+        .iter()
+        .map(|c| c.as_ref().and_then(|c| c.sigma_s))
+        .collect();
+    let groups = domains::group(n, &sigmas, &pair);
+    let mut domain_of = vec![String::new(); n];
+    let mut domain_list = Vec::new();
+    for (k, g) in groups.iter().enumerate() {
+        let name = sources[g[0]].name.clone();
+        for &i in g {
+            domain_of[i] = name.clone();
+        }
+        let clock = if k == 0 {
+            Clock::reference(reference_span.0, reference_span.1)
+        } else {
+            g.iter()
+                .filter_map(|&i| clocks[i].clone())
+                .filter(|c| c.status == TimeOffsetStatus::Ok)
+                .min_by(|a, b| {
+                    a.sigma_s
+                        .unwrap_or(f64::INFINITY)
+                        .total_cmp(&b.sigma_s.unwrap_or(f64::INFINITY))
+                })
+                .or_else(|| clocks[g[0]].clone())
+                .unwrap_or_else(|| Clock::reference(reference_span.0, reference_span.1))
+        };
+        domain_list.push(Domain {
+            name,
+            sources: g.iter().map(|&i| sources[i].name.clone()).collect(),
+            reference: k == 0,
+            clock,
+        });
+    }
+    // Warnings and sources out of line.
+    let mut warnings: Vec<Warning> = evaluation
+        .warnings
+        .iter()
+        .filter(|w| {
+            !matches!(
+                w.code,
+                WarningCode::LeverArmSuspected | WarningCode::LeverArmUnchecked
+            )
+        })
+        .cloned()
+        .collect();
+    let mut out_of_line = Vec::new();
+    for b in 1..n {
+        let name = &sources[b].name;
+        match (&clocks[b], pair_report(0, b)) {
+            (Some(c), _) if c.status == TimeOffsetStatus::Weak => out_of_line.push(OutOfLine {
+                source: name.clone(),
+                reason: OutOfLineReason::WeakOffset,
+                detail: format!("{name}: no confident offset against the reference"),
+            }),
+            (Some(c), _) if !c.is_constant() => out_of_line.push(OutOfLine {
+                source: name.clone(),
+                reason: OutOfLineReason::ClockNotConstant,
+                detail: format!(
+                    "{name}: {} clock against the reference ({})",
+                    c.model.as_str(),
+                    match c.model {
+                        crate::align::clock_model::OffsetModel::Linear =>
+                            format!("{:+.1} ppm", c.drift_ppm.unwrap_or(f64::NAN)),
+                        _ => c
+                            .segments
+                            .iter()
+                            .map(|s| format!("{:+.4} s", s.offset_s))
+                            .collect::<Vec<_>>()
+                            .join(" → "),
+                    }
+                ),
+            }),
+            (None, _) => {
+                let why = evaluations
+                    .iter()
+                    .find(|e| e.a == 0 && e.b == b)
+                    .and_then(|e| e.result.as_ref().err().cloned())
+                    .unwrap_or_default();
+                warnings.push(Warning::new(
+                    WarningCode::WeakTimeOffset,
+                    format!("{name}: not evaluated against the reference: {why}"),
+                ));
+                out_of_line.push(OutOfLine {
+                    source: name.clone(),
+                    reason: OutOfLineReason::WeakOffset,
+                    detail: format!("{name}: not evaluated against the reference: {why}"),
+                });
+            }
+            _ => {}
+        }
+    }
+    let failed: Vec<&Closure> = closures.iter().filter(|c| !c.consistent).collect();
+    if !failed.is_empty() {
+        let named = closure::out_of_line(n, &triples);
+        let worst = failed
+            .iter()
+            .max_by(|a, b| a.chi2.total_cmp(&b.chi2))
+            .map(|c| {
+                format!(
+                    "{} closes at {:+.1} ± {:.1} ms",
+                    c.sources.join(", "),
+                    c.residual_s * 1e3,
+                    c.sigma_s * 1e3
+                )
+            })
+            .unwrap_or_default();
+        let counts = format!(
+            "{} of {} triples fail to close; worst: {worst}",
+            failed.len(),
+            closures.len()
+        );
+        let message = match &named {
+            Some(closure::Culprit::Source(i)) => {
+                let name = &sources[*i].name;
+                out_of_line.push(OutOfLine {
+                    source: name.clone(),
+                    reason: OutOfLineReason::Closure,
+                    detail: format!(
+                        "{name}: every triple holding it fails to close, every other closes ({counts})"
+                    ),
+                });
+                format!(
+                    "{name}: its clock offsets do not add up with the others' ({counts}); check its clock and its lever arm"
+                )
+            }
+            Some(closure::Culprit::Pair(i, j)) => {
+                let (a, b) = (&sources[*i].name, &sources[*j].name);
+                for name in [a, b] {
+                    out_of_line.push(OutOfLine {
+                        source: name.clone(),
+                        reason: OutOfLineReason::PairClosure,
+                        detail: format!(
+                            "{a}–{b}: their pair's offset disagrees with every chain through a third source ({counts})"
+                        ),
+                    });
+                }
+                format!(
+                    "{a}–{b}: the offset measured between them disagrees with every chain through a third source ({counts}); trust the chains"
+                )
+            }
+            Some(closure::Culprit::Unclear(c)) => format!(
+                "{counts}; the failures do not single out one source{}",
+                if c.is_empty() {
+                    String::new()
+                } else {
+                    format!(
+                        " (every failing triple holds {})",
+                        c.iter()
+                            .map(|&i| sources[i].name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                }
+            ),
+            None => counts,
+        };
+        warnings.push(Warning::new(WarningCode::ClockClosureFailed, message));
+    }
+    // Per source.
+    let mut source_list = Vec::with_capacity(n);
+    for (i, s) in sources.iter().enumerate() {
+        let est = (i > 0).then(|| pair_report(0, i)).flatten();
+        let clock = clocks[i]
+            .clone()
+            .unwrap_or_else(|| Clock::reference(f64::NAN, f64::NAN));
+        let correction = if i == 0 {
+            ClockCorrection::Constant { dt_ns: 0 }
+        } else {
+            clock.correction()
+        };
+        let lever = match (i, est) {
+            (0, _) | (_, None) => None,
+            (_, Some(e))
+                if s.trajectory.orientations.is_some() && clock.status == TimeOffsetStatus::Ok =>
+            {
+                let mid = 0.5 * (clock_span(&clock).0 + clock_span(&clock).1);
+                let offset = clock.at(mid).map_or(clock.offset_s, |x| x.0);
+                lever::pose_fit(
+                    &sources[0].trajectory,
+                    &correction.apply(&s.trajectory),
+                    offset,
+                )
+                .or_else(|| Some(lever::positions_lever(e)))
+            }
+            (_, Some(e)) => Some(lever::positions_lever(e)),
+        };
+        let de = est.and_then(|e| e.drift_error.first());
+        source_list.push(SourceAudit {
+            name: s.name.clone(),
+            topic: s.label.clone(),
+            type_name: s.type_name.clone(),
+            file: found.file_of(&s.label).map(|p| p.display().to_string()),
+            reference: i == 0,
+            samples: s.trajectory.len(),
+            rate_hz: coverage::median_period_s(&s.trajectory)
+                .filter(|p| *p > 0.0)
+                .map(|p| 1.0 / p),
+            gaps: coverage::gaps(&s.trajectory),
+            coverage: coverage::coverage(&s.trajectory, &correction, reference_span),
+            clock,
+            lever_m: if i == 0 {
+                Some([Some(0.0); 3])
+            } else {
+                lever.as_ref().map(|l| l.lever_m)
+            },
+            lever,
+            de_rmse: de.and_then(|d| d.rmse),
+            de_window_m: de.map(|d| d.window_m),
+            ape_rmse_m: est
+                .and_then(|e| e.standard_metrics.as_ref())
+                .and_then(|m| m.ape.as_ref())
+                .map(|a| a.stats.rmse),
+            domain: domain_of[i].clone(),
+        });
+    }
+    Ok(AuditReport {
+        kind: AUDIT_KIND.into(),
+        schema_version: AUDIT_SCHEMA_VERSION,
+        tool: Tool::default(),
+        inputs: config
+            .recordings
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect(),
+        files: found
+            .files
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect(),
+        reference: sources[0].name.clone(),
+        stamp: config.params.stamp(),
+        sources: source_list,
+        pairs: pair_list,
+        closure: closures,
+        domains: domain_list,
+        out_of_line,
+        warnings,
+        evaluation,
+    })
+}
+
+/// The span a clock's segments cover (its first and last), absolute seconds.
+fn clock_span(c: &Clock) -> (f64, f64) {
+    match (c.segments.first(), c.segments.last()) {
+        (Some(a), Some(b)) => (a.t_start, b.t_end),
+        _ => {
+            let t = c
+                .profile
+                .first()
+                .zip(c.profile.last())
+                .map_or((0.0, 0.0), |(a, b)| (a.t, b.t));
+            t
+        }
+    }
+}
