@@ -12,7 +12,8 @@ use crate::plot::clock_domains::{ClockDomains, SourceLine};
 use crate::plot::offset_matrix::{Cell, OffsetMatrix};
 use crate::plot::offset_profile::OffsetProfile;
 use crate::plot::style::render_svg;
-use crate::render::html::{escape, page, svg_element, table};
+use crate::render::html::{page, svg_element, table};
+use crate::report::escape::html as escape;
 
 fn figure(svg: &str, caption: &str) -> String {
     format!(

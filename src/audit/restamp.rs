@@ -8,7 +8,8 @@
 //! The copy is the annotated recording's ([`crate::annotate::copy`], [`crate::annotate::any_input`]):
 //! one MCAP keeps its ids and compression; bags, rosbag2 folders and missions of several files become
 //! one MCAP with their messages' encodings and definitions. The input is only read; the output is
-//! written beside itself and renamed when complete ([`crate::output::AtomicFile`]).
+//! written by the output policy ([`crate::output::OutputFile`]: a temporary file beside it, renamed
+//! when complete).
 //!
 //! Which stamp decides a message's shift follows the audit (`stamp`: header or log): with header
 //! stamps, a stamped message moves by the correction at its header stamp and its log and publish
@@ -31,7 +32,7 @@ use crate::annotate::input_info::{read_input_info, InputInfo};
 use crate::annotate::stamps::{header_stamp, layout_of, map_tf_stamps, shift_stamp, StampLayout};
 use crate::clock::ClockCorrection;
 use crate::error::{Error, Result};
-use crate::output::{AtomicFile, OutputGuard};
+use crate::output::{OutputFile, OutputGuard};
 use crate::sources::mission::{Mission, Part};
 use crate::sources::recording::Recording;
 use crate::sources::{Progress, StampSource};
@@ -213,11 +214,11 @@ impl<W: Write + Seek> Annotations<W> for Restamper<'_> {
     }
 }
 
-/// Refuses an output that is an input (or inside an input folder), and an existing one without
-/// `force`.
+/// Claims `out` (`--out`) against the inputs: not an input, not inside an input folder (a mission
+/// folder), and not an existing file without `force`.
 pub fn check_output(recordings: &[PathBuf], out: &Path, force: bool) -> Result<()> {
     let files = super::discover::expand_files(recordings)?;
-    OutputGuard::new(recordings.iter().chain(&files)).check("--out", out)?;
+    OutputGuard::new(recordings.iter().chain(&files)).claim("--out", out)?;
     if out.exists() && !force {
         return Err(Error::InvalidArgument(format!(
             "{}: exists; pass --force to replace it",
@@ -292,7 +293,7 @@ pub fn restamp(
         path: out.to_path_buf(),
         detail: e.to_string(),
     };
-    let mut target = AtomicFile::create(out)?;
+    let mut target = OutputFile::create(out)?;
     let file = std::io::BufWriter::new(target.file().try_clone().map_err(out_err)?);
     let (copy, mut sink) = match (&single_mcap, &mission, &single) {
         (Some(p), _, _) => copy_with(p, file, out, options, &mut restamper, progress)?,

@@ -22,7 +22,7 @@ use crate::audit::{audit, AuditConfig};
 use crate::error::{Error, Result};
 use crate::eval::config::TrajectoryInput;
 use crate::eval::parameters::Parameters;
-use crate::output::{write_output, OutputGuard};
+use crate::output::{write_json, write_output, OutputGuard};
 
 /// Marks a per-mission audit result.
 pub const MISSION_AUDIT_KIND: &str = "trajdrift.mission-audit";
@@ -225,13 +225,7 @@ impl AuditSummary {
 
     /// Writes `audit-summary.json` and `audit-summary.md` into `dir`.
     pub fn write(&self, dir: &Path) -> Result<()> {
-        let path = dir.join("audit-summary.json");
-        let mut json = serde_json::to_vec_pretty(self).map_err(|e| Error::Output {
-            path: path.clone(),
-            detail: e.to_string(),
-        })?;
-        json.push(b'\n');
-        write_output(&path, &json)?;
+        write_json(&dir.join("audit-summary.json"), self)?;
         write_output(&dir.join("audit-summary.md"), self.to_markdown().as_bytes())
     }
 }
@@ -279,12 +273,16 @@ pub fn run_audit_batch(
         path: out_dir.to_path_buf(),
         detail: e.to_string(),
     })?;
-    let guard = OutputGuard::new(missions.iter().flat_map(|m| m.recordings.clone()));
+    let mut guard = OutputGuard::new(missions.iter().flat_map(|m| m.recordings.clone()));
+    guard.claim_dir("--out", out_dir)?;
     for name in ["audit-summary.json", "audit-summary.md"] {
-        guard.check("--out", &out_dir.join(name))?;
+        guard.claim("--out", &out_dir.join(name))?;
     }
     for m in missions {
-        guard.check("--out", &out_dir.join(format!("{}.audit.json", m.name)))?;
+        guard.claim("--out", &out_dir.join(format!("{}.audit.json", m.name)))?;
+        if html {
+            guard.claim("--html", &out_dir.join(format!("{}.audit.html", m.name)))?;
+        }
     }
     progress(BatchEvent::Planned {
         missions: missions.len(),
@@ -324,15 +322,9 @@ pub fn run_audit_batch(
                 });
                 let seconds = start.elapsed().as_secs_f64();
                 let path = out_dir.join(format!("{}.audit.json", m.name));
-                let json_err = |e: serde_json::Error| Error::Output {
-                    path: path.clone(),
-                    detail: e.to_string(),
-                };
                 match outcome {
                     Ok(o) => {
-                        let mut bytes = serde_json::to_vec_pretty(&o.report).map_err(json_err)?;
-                        bytes.push(b'\n');
-                        write_output(&path, &bytes)?;
+                        write_json(&path, &o.report)?;
                         if html {
                             let page = crate::audit::html::render(&o.report)?;
                             write_output(
@@ -360,9 +352,7 @@ pub fn run_audit_batch(
                             warnings: Vec::new(),
                             seconds,
                         };
-                        let mut bytes = serde_json::to_vec_pretty(&line).map_err(json_err)?;
-                        bytes.push(b'\n');
-                        write_output(&path, &bytes)?;
+                        write_json(&path, &line)?;
                         Ok(line)
                     }
                 }

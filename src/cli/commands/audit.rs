@@ -27,10 +27,10 @@ pub fn guard(recordings: &[std::path::PathBuf]) -> Result<OutputGuard> {
 
 /// Runs the command; returns the exit code.
 pub fn run(a: AuditArgs) -> Result<u8> {
-    let guard = guard(&a.recording)?;
+    let mut guard = guard(&a.recording)?;
     for (flag, out) in [("--json", &a.json), ("--html", &a.html)] {
         if let Some(out) = out {
-            guard.check(flag, out)?;
+            guard.claim(flag, out)?;
         }
     }
     let config = AuditConfig {
@@ -65,9 +65,7 @@ pub fn run(a: AuditArgs) -> Result<u8> {
     }
     let json_to_stdout = a.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
     if let Some(path) = &a.json {
-        let mut bytes = serde_json::to_vec_pretty(report)?;
-        bytes.push(b'\n');
-        guard.write("--json", path, &bytes)?;
+        trajdrift::output::write_json(path, report)?;
     }
     let table = !a.quiet && !json_to_stdout;
     if table {

@@ -25,7 +25,12 @@ fn claim_outputs(a: &SimulateArgs) -> Result<()> {
     let mut guard = OutputGuard::default();
     if a.grandtour {
         guard.claim_dir("OUT", &a.out)?;
-        for f in grandtour_files(&a.out, &grandtour_options(a)) {
+        let files = if a.multi_clock {
+            trajdrift::simulate::grandtour::multi_clock_files(&a.out, a.merged)
+        } else {
+            grandtour_files(&a.out, &grandtour_options(a))
+        };
+        for f in files {
             guard.claim("OUT", &f)?;
         }
     } else {
@@ -67,9 +72,7 @@ fn multi_clock(a: &SimulateArgs, route: &[trajdrift::simulate::motion::Segment])
     let mission = simulate_sources(&MultiClockConfig::varied(a.seed, duration), route);
     let files = write_multi_clock(&a.out, &mission, a.merged)?;
     if let Some(path) = &a.truth {
-        let mut bytes = serde_json::to_vec_pretty(&multi_clock_truth(&mission, PRISM_TOPIC))?;
-        bytes.push(b'\n');
-        write_output(path, &bytes)?;
+        write_json(path, &multi_clock_truth(&mission, PRISM_TOPIC))?;
     }
     eprintln!(
         "wrote {} ({} bags, {} sources, {:.0} s)",

@@ -436,6 +436,26 @@ fn multi_clock_frames(name: &str) -> (&'static str, &'static str) {
     }
 }
 
+/// The bags of the multi-clock layout ([`write_multi_clock`]), in name order.
+pub fn multi_clock_files(dir: &Path, merged: bool) -> Vec<PathBuf> {
+    if merged {
+        return vec![dir.join(format!("{STAMP}_merged.bag"))];
+    }
+    let mut v: Vec<PathBuf> = MULTI_CLOCK_BAGS.iter().map(|b| dir.join(b.file_name())).collect();
+    v.sort();
+    v
+}
+
+/// The bags of the multi-clock layout.
+const MULTI_CLOCK_BAGS: [GrandTourBag; 6] = [
+    GrandTourBag::TfMinimal,
+    GrandTourBag::Prism,
+    GrandTourBag::Ins,
+    GrandTourBag::Dlio,
+    GrandTourBag::StateEstimator,
+    GrandTourBag::Open3dSlam,
+];
+
 /// Writes a multi-source mission ([`crate::simulate::sources`]) GrandTour's way: the prism (the
 /// reference, on the true clock) in `_ap20_prism_position.bag`, each source in its own bag on its own
 /// clock (header stamps and record times both read that clock, as a per-computer recorder writes them):
@@ -543,17 +563,11 @@ pub fn write_multi_clock(
     }
     all.sort_by_key(|m| m.time);
     let span = (t0, mission.duration_s);
-    let mut bags = vec![GrandTourBag::TfMinimal, GrandTourBag::Prism];
-    for s in &c.sources {
-        let b = multi_clock_bag(&s.name);
-        if !bags.contains(&b) {
-            bags.push(b);
-        }
-    }
+    let bags = MULTI_CLOCK_BAGS;
     let mut written = Vec::new();
     if merged {
         let path = dir.join(format!("{STAMP}_merged.bag"));
-        write_bag(&path, span, &all, &bags, 0)?;
+        write_bag(&path, span, &all, &bags[..], 0)?;
         written.push(path);
     } else {
         for &bag in &bags {
