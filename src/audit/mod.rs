@@ -16,6 +16,8 @@
 //! - [`closure`]: Δt_AB + Δt_BC − Δt_AC of every triple with its σ and a χ² test, naming a source
 //!   out of line;
 //! - [`domains`]: sources grouped by clock;
+//! - [`judge`]: closure, the source (or pair) out of line and the domains, from the pairs' clocks —
+//!   also on an audit read back and edited ([`judge::rejudge`]);
 //! - [`report`]: the result and its JSON (`schemas/audit.schema.json`), [`table`] and [`html`] its text
 //!   and page;
 //! - [`restamp_plan`] and [`restamp`]: which messages move by which clock, and the copy that moves them.
@@ -27,6 +29,7 @@ pub mod coverage;
 pub mod discover;
 pub mod domains;
 pub mod html;
+pub mod judge;
 pub mod lever;
 pub mod pairs;
 pub mod report;
@@ -47,8 +50,8 @@ use crate::sources::Progress;
 use crate::trajectory::Trajectory;
 use discover::{discover, Discovered, SourceRequest};
 use report::{
-    AuditReport, Clock, Closure, Domain, OutOfLine, OutOfLineReason, PairOffset, SourceAudit,
-    AUDIT_KIND, AUDIT_SCHEMA_VERSION,
+    AuditReport, Clock, OutOfLine, OutOfLineReason, PairOffset, SourceAudit, AUDIT_KIND,
+    AUDIT_SCHEMA_VERSION,
 };
 
 /// What to audit.
@@ -223,76 +226,10 @@ fn build(
         });
     }
     let pair = |a: usize, b: usize| pair_clock[a.min(b)][a.max(b)].clone();
-    // Closure of every triple whose three pairs were measured.
-    let mut closures = Vec::new();
-    let mut triples = Vec::new();
-    for a in 0..n {
-        for b in a + 1..n {
-            for c in b + 1..n {
-                let (Some(ab), Some(bc), Some(ac)) = (pair(a, b), pair(b, c), pair(a, c)) else {
-                    continue;
-                };
-                let spans = [a, b, c].map(|i| span_s(&sources[i].trajectory));
-                let span = (
-                    spans.iter().map(|s| s.0).fold(f64::NEG_INFINITY, f64::max),
-                    spans.iter().map(|s| s.1).fold(f64::INFINITY, f64::min),
-                );
-                let usable = |c: &Clock| {
-                    c.status == TimeOffsetStatus::Ok || c.status == TimeOffsetStatus::Given
-                };
-                if !(usable(&ab) && usable(&bc) && usable(&ac)) {
-                    continue;
-                }
-                let Some(stat) = closure::closure(&ab, &bc, &ac, span) else {
-                    continue;
-                };
-                triples.push(([a, b, c], stat.consistent));
-                closures.push(Closure {
-                    sources: [a, b, c].map(|i| sources[i].name.clone()),
-                    residual_s: stat.residual_s,
-                    sigma_s: stat.sigma_s,
-                    chi2: stat.chi2,
-                    dof: stat.dof,
-                    p_value: stat.p_value,
-                    consistent: stat.consistent,
-                });
-            }
-        }
-    }
-    // Domains.
-    let sigmas: Vec<Option<f64>> = clocks
-        .iter()
-        .map(|c| c.as_ref().and_then(|c| c.sigma_s))
-        .collect();
-    let groups = domains::group(n, &sigmas, &pair);
-    let mut domain_of = vec![String::new(); n];
-    let mut domain_list = Vec::new();
-    for (k, g) in groups.iter().enumerate() {
-        let name = sources[g[0]].name.clone();
-        for &i in g {
-            domain_of[i] = name.clone();
-        }
-        let clock = if k == 0 {
-            Clock::reference(reference_span.0, reference_span.1)
-        } else {
-            g.iter()
-                .filter_map(|&i| clocks[i].clone())
-                .filter(|c| c.status == TimeOffsetStatus::Ok)
-                .min_by(|a, b| {
-                    a.sigma_s
-                        .unwrap_or(f64::INFINITY)
-                        .total_cmp(&b.sigma_s.unwrap_or(f64::INFINITY))
-                })
-                .or_else(|| clocks[g[0]].clone())
-                .unwrap_or_else(|| Clock::reference(reference_span.0, reference_span.1))
-        };
-        domain_list.push(Domain {
-            name,
-            sources: g.iter().map(|&i| sources[i].name.clone()).collect(),
-            reference: k == 0,
-            clock,
-        });
-    }
+    let names: Vec<String> = sources.iter().map(|s| s.name.clone()).collect();
+    let spans: Vec<(f64, f64)> = sources.iter().map(|s| span_s(&s.trajectory)).collect();
+    let judged = judge::judge(&names, &spans, &pair, reference_span);
+    let domain_of = judged.domain_of.clone();
     // Warnings and sources out of line.
     let mut warnings: Vec<Warning> = evaluation
         .warnings
@@ -351,73 +288,8 @@ fn build(
             _ => {}
         }
     }
-    let failed: Vec<&Closure> = closures.iter().filter(|c| !c.consistent).collect();
-    if !failed.is_empty() {
-        let named = closure::out_of_line(n, &triples);
-        let worst = failed
-            .iter()
-            .max_by(|a, b| a.chi2.total_cmp(&b.chi2))
-            .map(|c| {
-                format!(
-                    "{} closes at {:+.1} ± {:.1} ms",
-                    c.sources.join(", "),
-                    c.residual_s * 1e3,
-                    c.sigma_s * 1e3
-                )
-            })
-            .unwrap_or_default();
-        let counts = format!(
-            "{} of {} triples fail to close; worst: {worst}",
-            failed.len(),
-            closures.len()
-        );
-        let message = match &named {
-            Some(closure::Culprit::Source(i)) => {
-                let name = &sources[*i].name;
-                out_of_line.push(OutOfLine {
-                    source: name.clone(),
-                    reason: OutOfLineReason::Closure,
-                    detail: format!(
-                        "{name}: every triple holding it fails to close, every other closes ({counts})"
-                    ),
-                });
-                format!(
-                    "{name}: its clock offsets do not add up with the others' ({counts}); check its clock and its lever arm"
-                )
-            }
-            Some(closure::Culprit::Pair(i, j)) => {
-                let (a, b) = (&sources[*i].name, &sources[*j].name);
-                for name in [a, b] {
-                    out_of_line.push(OutOfLine {
-                        source: name.clone(),
-                        reason: OutOfLineReason::PairClosure,
-                        detail: format!(
-                            "{a}–{b}: their pair's offset disagrees with every chain through a third source ({counts})"
-                        ),
-                    });
-                }
-                format!(
-                    "{a}–{b}: the offset measured between them disagrees with every chain through a third source ({counts}); trust the chains"
-                )
-            }
-            Some(closure::Culprit::Unclear(c)) => format!(
-                "{counts}; the failures do not single out one source{}",
-                if c.is_empty() {
-                    String::new()
-                } else {
-                    format!(
-                        " (every failing triple holds {})",
-                        c.iter()
-                            .map(|&i| sources[i].name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )
-                }
-            ),
-            None => counts,
-        };
-        warnings.push(Warning::new(WarningCode::ClockClosureFailed, message));
-    }
+    out_of_line.extend(judged.out_of_line);
+    warnings.extend(judged.warning);
     // Per source.
     let mut source_list = Vec::with_capacity(n);
     for (i, s) in sources.iter().enumerate() {
@@ -493,8 +365,8 @@ fn build(
         stamp: config.params.stamp(),
         sources: source_list,
         pairs: pair_list,
-        closure: closures,
-        domains: domain_list,
+        closure: judged.closure,
+        domains: judged.domains,
         out_of_line,
         warnings,
         evaluation,
