@@ -303,14 +303,8 @@ fn write_bag(
         .file()
         .try_clone()
         .map_err(|e| Error::output(path, &e))?;
-    write_bag_to(
-        std::io::BufWriter::new(file),
-        span,
-        all,
-        bags,
-        bulk_bytes,
-    )
-    .map_err(|e| Error::output(path, &e))?;
+    write_bag_to(std::io::BufWriter::new(file), span, all, bags, bulk_bytes)
+        .map_err(|e| Error::output(path, &e))?;
     target.commit()
 }
 
@@ -441,7 +435,10 @@ pub fn multi_clock_files(dir: &Path, merged: bool) -> Vec<PathBuf> {
     if merged {
         return vec![dir.join(format!("{STAMP}_merged.bag"))];
     }
-    let mut v: Vec<PathBuf> = MULTI_CLOCK_BAGS.iter().map(|b| dir.join(b.file_name())).collect();
+    let mut v: Vec<PathBuf> = MULTI_CLOCK_BAGS
+        .iter()
+        .map(|b| dir.join(b.file_name()))
+        .collect();
     v.sort();
     v
 }
