@@ -75,23 +75,7 @@ pub fn copy_recording<W: Write + Seek, A: Annotations<W>>(
             let channel = match channels.entry(c.id) {
                 Entry::Occupied(e) => e.into_mut(),
                 Entry::Vacant(e) => {
-                    let schema_id = schema_for(&mut w, &mut schemas, c).map_err(write_err)?;
-                    w.add_channel_with_id(
-                        c.id,
-                        schema_id,
-                        &c.topic,
-                        &c.message_encoding,
-                        &BTreeMap::new(),
-                    )
-                    .map_err(write_err)?;
-                    e.insert(InputChannel {
-                        id: c.id,
-                        schema_id,
-                        topic: c.topic.clone(),
-                        message_encoding: c.message_encoding.clone(),
-                        schema_name: c.schema_name.clone(),
-                        schema_data: c.schema_data.clone(),
-                    })
+                    e.insert(add_channel(&mut w, &mut schemas, c).map_err(write_err)?)
                 }
             };
             // Formats without sequence numbers (ROS 1 bags, rosbag2) get them counted per channel.
@@ -133,6 +117,30 @@ pub fn copy_recording<W: Write + Seek, A: Annotations<W>>(
     annotations.finish(&mut w)?;
     w.finish().map_err(write_err)?;
     Ok((outcome, w.into_inner()))
+}
+
+/// Writes channel `c` (its schema at its first use) to the copy, with its input id.
+fn add_channel<W: Write + Seek>(
+    w: &mut Writer<W>,
+    schemas: &mut HashMap<(String, String, Vec<u8>), u16>,
+    c: &ChannelInfo,
+) -> std::result::Result<InputChannel, McapError> {
+    let schema_id = schema_for(w, schemas, c)?;
+    w.add_channel_with_id(
+        c.id,
+        schema_id,
+        &c.topic,
+        &c.message_encoding,
+        &BTreeMap::new(),
+    )?;
+    Ok(InputChannel {
+        id: c.id,
+        schema_id,
+        topic: c.topic.clone(),
+        message_encoding: c.message_encoding.clone(),
+        schema_name: c.schema_name.clone(),
+        schema_data: c.schema_data.clone(),
+    })
 }
 
 /// The schema id of `c`'s schema, written at its first use; 0 (none) for a schemaless channel.

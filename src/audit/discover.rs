@@ -119,19 +119,7 @@ pub fn discover(recordings: &[PathBuf], request: &SourceRequest) -> Result<Disco
     let topics: Vec<TopicInfo> = crate::sources::open_all(recordings)?.topics()?;
     let readable: Vec<&TopicInfo> = topics.iter().filter(|t| t.readable).collect();
     let mut notes = Vec::new();
-    let preset = match &request.preset {
-        Some(p) => Some(Preset::load(p)?),
-        None if request.reference.is_none() => match matching(&topics).as_slice() {
-            [one] => {
-                notes.push(format!(
-                    "preset {one}: the recording matches it, its reference is used (choose with --preset or --reference)"
-                ));
-                Some(Preset::load(one)?)
-            }
-            _ => None,
-        },
-        None => None,
-    };
+    let preset = pick_preset(request, &topics, &mut notes)?;
     let given: Vec<NamedInput> = request
         .sources
         .iter()
@@ -145,60 +133,14 @@ pub fn discover(recordings: &[PathBuf], request: &SourceRequest) -> Result<Disco
         }
         None => match user_reference {
             Some(r) => (r, Vec::new()),
-            None => {
-                fn by_count<'a>(pool: Vec<&'a TopicInfo>) -> Option<&'a TopicInfo> {
-                    pool.into_iter()
-                        .max_by_key(|t| (t.message_count, std::cmp::Reverse(t.topic.clone())))
-                }
-                let positions: Vec<&TopicInfo> = readable
-                    .iter()
-                    .copied()
-                    .filter(|t| position_only(t))
-                    .collect();
-                let picked = by_count(positions)
-                    .or_else(|| by_count(readable.clone()))
-                    .ok_or_else(|| {
-                        Error::InvalidArgument(format!(
-                            "{}: no pose or position topic to audit (see `trajdrift topics`); give --reference TOPIC and --source TOPIC",
-                            recordings[0].display()
-                        ))
-                    })?;
-                notes.push(format!(
-                    "reference {}: picked as the {} with the most messages (choose with --reference TOPIC)",
-                    picked.topic,
-                    if position_only(picked) {
-                        "position-only topic"
-                    } else {
-                        "topic"
-                    }
-                ));
-                (NamedInput::topic(&picked.topic), Vec::new())
-            }
+            None => (
+                pick_reference(&recordings[0], &readable, &mut notes)?,
+                Vec::new(),
+            ),
         },
     };
     let reference_topic = Discovered::topic(&reference).to_string();
-    let mut sources: Vec<NamedInput> = Vec::new();
-    let push = |s: NamedInput, sources: &mut Vec<NamedInput>| {
-        let t = Discovered::topic(&s).to_string();
-        if t != reference_topic && !sources.iter().any(|o| Discovered::topic(o) == t) {
-            sources.push(s);
-        }
-    };
-    if given.is_empty() {
-        // The preset's names first (they name the sources as the dataset does), then the rest.
-        for s in preset_sources {
-            push(s, &mut sources);
-        }
-        let mut rest: Vec<&str> = readable.iter().map(|t| t.topic.as_str()).collect();
-        rest.sort_unstable();
-        for t in rest {
-            push(NamedInput::topic(t), &mut sources);
-        }
-    } else {
-        for s in given {
-            push(s, &mut sources);
-        }
-    }
+    let sources = pick_sources(&reference_topic, given, preset_sources, &readable);
     if sources.is_empty() {
         return Err(Error::InvalidArgument(format!(
             "{}: only the reference {reference_topic} is a pose or position topic; an audit needs two sources or more (give --source TOPIC, e.g. a TF chain /tf:PARENT:CHILD)",
@@ -221,4 +163,93 @@ pub fn discover(recordings: &[PathBuf], request: &SourceRequest) -> Result<Disco
         files,
         notes,
     })
+}
+
+/// The preset: the one asked, or the one the recording matches when no reference was given.
+fn pick_preset(
+    request: &SourceRequest,
+    topics: &[TopicInfo],
+    notes: &mut Vec<String>,
+) -> Result<Option<Preset>> {
+    Ok(match &request.preset {
+        Some(p) => Some(Preset::load(p)?),
+        None if request.reference.is_none() => match matching(topics).as_slice() {
+            [one] => {
+                notes.push(format!(
+                    "preset {one}: the recording matches it, its reference is used (choose with --preset or --reference)"
+                ));
+                Some(Preset::load(one)?)
+            }
+            _ => None,
+        },
+        None => None,
+    })
+}
+
+/// The reference when none was given: the position-only topic with the most messages, else the
+/// topic with the most.
+fn pick_reference(
+    recording: &Path,
+    readable: &[&TopicInfo],
+    notes: &mut Vec<String>,
+) -> Result<NamedInput> {
+    fn by_count<'a>(pool: Vec<&'a TopicInfo>) -> Option<&'a TopicInfo> {
+        pool.into_iter()
+            .max_by_key(|t| (t.message_count, std::cmp::Reverse(t.topic.clone())))
+    }
+    let positions: Vec<&TopicInfo> = readable
+        .iter()
+        .copied()
+        .filter(|t| position_only(t))
+        .collect();
+    let picked = by_count(positions)
+        .or_else(|| by_count(readable.to_vec()))
+        .ok_or_else(|| {
+            Error::InvalidArgument(format!(
+                "{}: no pose or position topic to audit (see `trajdrift topics`); give --reference TOPIC and --source TOPIC",
+                recording.display()
+            ))
+        })?;
+    notes.push(format!(
+        "reference {}: picked as the {} with the most messages (choose with --reference TOPIC)",
+        picked.topic,
+        if position_only(picked) {
+            "position-only topic"
+        } else {
+            "topic"
+        }
+    ));
+    Ok(NamedInput::topic(&picked.topic))
+}
+
+/// The sources: those given, else the preset's (named as the dataset names them) and then every
+/// readable topic; the reference and repeated topics left out.
+fn pick_sources(
+    reference_topic: &str,
+    given: Vec<NamedInput>,
+    preset_sources: Vec<NamedInput>,
+    readable: &[&TopicInfo],
+) -> Vec<NamedInput> {
+    let mut sources: Vec<NamedInput> = Vec::new();
+    let push = |s: NamedInput, sources: &mut Vec<NamedInput>| {
+        let t = Discovered::topic(&s).to_string();
+        if t != reference_topic && !sources.iter().any(|o| Discovered::topic(o) == t) {
+            sources.push(s);
+        }
+    };
+    if given.is_empty() {
+        for s in preset_sources {
+            push(s, &mut sources);
+        }
+        let mut rest: Vec<&str> = readable.iter().map(|t| t.topic.as_str()).collect();
+        rest.sort_unstable();
+        for t in rest {
+            push(NamedInput::topic(t), &mut sources);
+        }
+    } else {
+        for s in given {
+            push(s, &mut sources);
+        }
+    }
+    sources
 }

@@ -106,6 +106,19 @@ pub fn clock_lines(a: &AuditReport, t0: f64) -> ClockDomains {
 /// The page.
 pub fn render(a: &AuditReport) -> Result<String> {
     let t0 = a.sources.first().map_or(0.0, |r| r.coverage.t_start);
+    let mut b = head_and_warnings(a);
+    b += &sources_table(a, t0);
+    b += &domains_section(a, t0)?;
+    b += &closure_table(a);
+    b += &profiles(a, t0)?;
+    Ok(page(
+        &format!("trajdrift audit — {}", a.inputs.join(" ")),
+        &b,
+    ))
+}
+
+/// The title line, the warnings and the sources out of line.
+fn head_and_warnings(a: &AuditReport) -> String {
     let mut b = format!(
         "<h1>trajdrift audit — {}</h1>\n<p>{} {} · reference <code>{}</code> · {} sources in {} file(s) · times in s from the reference's start</p>\n",
         escape(&a.inputs.join(" ")),
@@ -136,6 +149,12 @@ pub fn render(a: &AuditReport) -> Result<String> {
             escape(&o.detail)
         );
     }
+    b
+}
+
+/// The table of sources.
+fn sources_table(a: &AuditReport, t0: f64) -> String {
+    let mut b = String::new();
     b.push_str("<h2>Sources</h2>\n");
     let rows: Vec<Vec<String>> = a
         .sources
@@ -183,6 +202,12 @@ pub fn render(a: &AuditReport) -> Result<String> {
         ],
         &rows,
     );
+    b
+}
+
+/// The offset matrix, each source's clock by domain, and the domains' table.
+fn domains_section(a: &AuditReport, t0: f64) -> Result<String> {
+    let mut b = String::new();
     b.push_str("<h2>Offset matrix</h2>\n");
     b += &figure(
         &render_svg(&offset_matrix(a))?,
@@ -209,6 +234,12 @@ pub fn render(a: &AuditReport) -> Result<String> {
         })
         .collect();
     b += &table(&["domain", "sources", "clock against the reference"], &rows);
+    Ok(b)
+}
+
+/// The closure of every triple.
+fn closure_table(a: &AuditReport) -> String {
+    let mut b = String::new();
     b.push_str("<h2>Closure</h2>\n<p>Δt_AB + Δt_BC − Δt_AC of every triple, with σ from the three pairs' σ; consistent at 3σ (χ² over the pieces between clock changes).</p>\n");
     let rows: Vec<Vec<String>> = a
         .closure
@@ -237,6 +268,12 @@ pub fn render(a: &AuditReport) -> Result<String> {
         ],
         &rows,
     );
+    b
+}
+
+/// Each source's offset profile.
+fn profiles(a: &AuditReport, t0: f64) -> Result<String> {
+    let mut b = String::new();
     b.push_str("<h2>Offset profiles</h2>\n");
     for s in a.sources.iter().filter(|s| !s.reference) {
         let mut o = s.clock.time_offset();
@@ -249,8 +286,5 @@ pub fn render(a: &AuditReport) -> Result<String> {
         );
         b += &figure(&render_svg(&fig)?, &format!("{} ({})", s.name, s.topic));
     }
-    Ok(page(
-        &format!("trajdrift audit — {}", a.inputs.join(" ")),
-        &b,
-    ))
+    Ok(b)
 }

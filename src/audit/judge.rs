@@ -23,20 +23,41 @@ pub struct Judged {
     pub warning: Option<Warning>,
 }
 
+type PairFn<'a> = dyn Fn(usize, usize) -> Option<Clock> + 'a;
+
 /// Judges `names` (the reference first) whose spans (absolute seconds, own clocks) are `spans`, from
 /// `pair(a, b)` (a < b: B's stamps onto A's clock).
 pub fn judge(
     names: &[String],
     spans: &[(f64, f64)],
-    pair: &dyn Fn(usize, usize) -> Option<Clock>,
+    pair: &PairFn<'_>,
     reference_span: (f64, f64),
 ) -> Judged {
-    let n = names.len();
     let pair = |a: usize, b: usize| pair(a.min(b), a.max(b));
-    let mut closures = Vec::new();
-    let mut triples = Vec::new();
+    let (closures, triples) = closures(names, spans, &pair);
+    let (domains, domain_of) = domains(names, &pair, reference_span);
+    let (out_of_line, warning) = verdict(names, &closures, &triples);
+    Judged {
+        closure: closures,
+        domains,
+        domain_of,
+        out_of_line,
+        warning,
+    }
+}
+
+/// The closure of every triple whose three pairs were measured with a usable offset, and each
+/// triple's indices with whether it closes.
+fn closures(
+    names: &[String],
+    spans: &[(f64, f64)],
+    pair: &PairFn<'_>,
+) -> (Vec<Closure>, Vec<([usize; 3], bool)>) {
+    let n = names.len();
     let usable =
         |c: &Clock| c.status == TimeOffsetStatus::Ok || c.status == TimeOffsetStatus::Given;
+    let mut closures = Vec::new();
+    let mut triples = Vec::new();
     for a in 0..n {
         for b in a + 1..n {
             for c in b + 1..n {
@@ -72,20 +93,26 @@ pub fn judge(
             }
         }
     }
-    // Domains.
+    (closures, triples)
+}
+
+/// The clock domains (the reference's first) and each source's domain name.
+fn domains(
+    names: &[String],
+    pair: &PairFn<'_>,
+    reference_span: (f64, f64),
+) -> (Vec<Domain>, Vec<String>) {
+    let n = names.len();
     let to_reference: Vec<Option<Clock>> = (0..n)
         .map(|i| if i == 0 { None } else { pair(0, i) })
         .collect();
     let sigmas: Vec<Option<f64>> = (0..n)
-        .map(|i| {
-            if i == 0 {
-                Some(0.0)
-            } else {
-                to_reference[i].as_ref().and_then(|c| c.sigma_s)
-            }
+        .map(|i| match i {
+            0 => Some(0.0),
+            _ => to_reference[i].as_ref().and_then(|c| c.sigma_s),
         })
         .collect();
-    let groups = domains::group(n, &sigmas, &|a, b| pair(a, b));
+    let groups = domains::group(n, &sigmas, pair);
     let mut domain_of = vec![String::new(); n];
     let mut domain_list = Vec::new();
     for (k, g) in groups.iter().enumerate() {
@@ -94,6 +121,7 @@ pub fn judge(
             domain_of[i] = name.clone();
         }
         let reference = Clock::reference(reference_span.0, reference_span.1);
+        // The reference's domain is on its clock; another moves by its most precise member's.
         let clock = if k == 0 {
             reference
         } else {
@@ -115,74 +143,73 @@ pub fn judge(
             clock,
         });
     }
-    // Closure failures: who is out of line.
-    let mut out_of_line = Vec::new();
+    (domain_list, domain_of)
+}
+
+/// Who the failing triples single out (a source, or the two of one pair), and the warning.
+fn verdict(
+    names: &[String],
+    closures: &[Closure],
+    triples: &[([usize; 3], bool)],
+) -> (Vec<OutOfLine>, Option<Warning>) {
     let failed: Vec<&Closure> = closures.iter().filter(|c| !c.consistent).collect();
-    let warning = (!failed.is_empty()).then(|| {
-        let worst = failed
-            .iter()
-            .max_by(|a, b| a.chi2.total_cmp(&b.chi2))
-            .map(|c| {
+    let Some(worst) = failed.iter().max_by(|a, b| a.chi2.total_cmp(&b.chi2)) else {
+        return (Vec::new(), None);
+    };
+    let counts = format!(
+        "{} of {} triples fail to close; worst: {} closes at {:+.1} ± {:.1} ms",
+        failed.len(),
+        closures.len(),
+        worst.sources.join(", "),
+        worst.residual_s * 1e3,
+        worst.sigma_s * 1e3
+    );
+    let line = |name: &String, reason, detail: String| OutOfLine {
+        source: name.clone(),
+        reason,
+        detail,
+    };
+    let mut out_of_line = Vec::new();
+    let message = match closure::out_of_line(names.len(), triples) {
+        Some(Culprit::Source(i)) => {
+            let name = &names[i];
+            out_of_line.push(line(
+                name,
+                OutOfLineReason::Closure,
                 format!(
-                    "{} closes at {:+.1} ± {:.1} ms",
-                    c.sources.join(", "),
-                    c.residual_s * 1e3,
-                    c.sigma_s * 1e3
-                )
-            })
-            .unwrap_or_default();
-        let counts = format!(
-            "{} of {} triples fail to close; worst: {worst}",
-            failed.len(),
-            closures.len()
-        );
-        let message = match closure::out_of_line(n, &triples) {
-            Some(Culprit::Source(i)) => {
-                let name = &names[i];
-                out_of_line.push(OutOfLine {
-                    source: name.clone(),
-                    reason: OutOfLineReason::Closure,
-                    detail: format!(
-                        "{name}: every triple holding it fails to close, every other closes ({counts})"
-                    ),
-                });
-                format!(
-                    "{name}: its clock offsets do not add up with the others' ({counts}); check its clock and its lever arm"
-                )
+                    "{name}: every triple holding it fails to close, every other closes ({counts})"
+                ),
+            ));
+            format!(
+                "{name}: its clock offsets do not add up with the others' ({counts}); check its clock and its lever arm"
+            )
+        }
+        Some(Culprit::Pair(i, j)) => {
+            let (a, b) = (&names[i], &names[j]);
+            for name in [a, b] {
+                out_of_line.push(line(
+                    name,
+                    OutOfLineReason::PairClosure,
+                    format!("{a}–{b}: their pair's offset disagrees with every chain through a third source ({counts})"),
+                ));
             }
-            Some(Culprit::Pair(i, j)) => {
-                let (a, b) = (&names[i], &names[j]);
-                for name in [a, b] {
-                    out_of_line.push(OutOfLine {
-                        source: name.clone(),
-                        reason: OutOfLineReason::PairClosure,
-                        detail: format!(
-                            "{a}–{b}: their pair's offset disagrees with every chain through a third source ({counts})"
-                        ),
-                    });
-                }
-                format!(
-                    "{a}–{b}: the offset measured between them disagrees with every chain through a third source ({counts}); trust the chains"
-                )
-            }
-            Some(Culprit::Unclear(c)) if !c.is_empty() => format!(
-                "{counts}; the failures do not single out one source (every failing triple holds {})",
-                c.iter()
-                    .map(|&i| names[i].as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-            _ => format!("{counts}; the failures do not single out one source"),
-        };
-        Warning::new(WarningCode::ClockClosureFailed, message)
-    });
-    Judged {
-        closure: closures,
-        domains: domain_list,
-        domain_of,
+            format!(
+                "{a}–{b}: the offset measured between them disagrees with every chain through a third source ({counts}); trust the chains"
+            )
+        }
+        Some(Culprit::Unclear(c)) if !c.is_empty() => format!(
+            "{counts}; the failures do not single out one source (every failing triple holds {})",
+            c.iter()
+                .map(|&i| names[i].as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        _ => format!("{counts}; the failures do not single out one source"),
+    };
+    (
         out_of_line,
-        warning,
-    }
+        Some(Warning::new(WarningCode::ClockClosureFailed, message)),
+    )
 }
 
 /// Judges an audit again from its pairs as they stand (after a clock was replaced): its closure,

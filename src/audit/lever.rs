@@ -229,63 +229,15 @@ fn pseudo_inverse(n: &Matrix4<f64>, fixed: [bool; 4]) -> (Matrix4<f64>, [bool; 4
 pub fn pose_fit(reference: &Trajectory, src: &Trajectory, offset_s: f64) -> Option<LeverFit> {
     src.orientations.as_ref()?;
     // The vertical lever needs the body to tilt (see MIN_TILT_RAD): held at 0 otherwise.
-    let ups: Vec<Vector3<f64>> = samples(reference, src, 0.0)
-        .iter()
-        .map(|s| s.r_src * Vector3::z())
-        .collect();
-    let mean_up = ups.iter().sum::<Vector3<f64>>() / ups.len().max(1) as f64;
-    let tilt = (ups
-        .iter()
-        .map(|u| (u - mean_up).norm_squared())
-        .sum::<f64>()
-        / ups.len().max(1) as f64)
-        .sqrt();
-    let fixed = [false, false, false, tilt < MIN_TILT_RAD];
-    let mut lever = Vector3::zeros();
-    let mut delta = 0.0;
-    let mut last: Option<(Vec<WindowEquations>, Matrix4<f64>, [bool; 4])> = None;
-    for _ in 0..20 {
-        let s = samples(reference, src, delta);
-        let eqs = equations(&s, &lever);
-        if eqs.len() < 3 {
-            return None;
-        }
-        let n: Matrix4<f64> = eqs.iter().map(|e| e.n).sum();
-        let b: Vector4<f64> = eqs.iter().map(|e| e.b).sum();
-        let (inv, unobservable) = pseudo_inverse(&n, fixed);
-        let step = inv * b;
-        // Steps bounded (0.5 s, 1 m) so that one poor linearisation cannot throw the fit away.
-        delta += step[0].clamp(-0.5, 0.5);
-        let dl = Vector3::new(step[1], step[2], step[3]);
-        lever += dl * (1.0 / dl.norm().max(1.0));
-        let done = step[0].abs() < 1e-5 && dl.norm() < 1e-4;
-        last = Some((eqs, inv, unobservable));
-        if done {
-            break;
-        }
-    }
-    let (eqs, inv, mut unobservable) = last?;
+    let fixed = [false, false, false, tilt_rad(reference, src) < MIN_TILT_RAD];
+    let (lever, delta, eqs, inv, mut unobservable) = gauss_newton(reference, src, fixed)?;
     // A lever beyond a robot's size is a fit that did not settle: not observable.
     for k in 0..3 {
         if lever[k].abs() > 5.0 {
             unobservable[k + 1] = true;
         }
     }
-    // Jackknife over windows of the linearised problem at the solution.
-    let n_all: Matrix4<f64> = eqs.iter().map(|e| e.n).sum();
-    let b_all: Vector4<f64> = eqs.iter().map(|e| e.b).sum();
-    let w = eqs.len() as f64;
-    let leave_out: Vec<Vector4<f64>> = eqs
-        .iter()
-        .map(|e| pseudo_inverse(&(n_all - e.n), fixed).0 * (b_all - e.b))
-        .collect();
-    let mean = leave_out.iter().sum::<Vector4<f64>>() / w;
-    let var = leave_out
-        .iter()
-        .map(|x| (x - mean).component_mul(&(x - mean)))
-        .sum::<Vector4<f64>>()
-        * ((w - 1.0) / w);
-    let sigma = var.map(f64::sqrt);
+    let sigma = jackknife_sigma(&eqs, fixed);
     let corr = inv[(0, 1)] / (inv[(0, 0)] * inv[(1, 1)]).sqrt().max(1e-300);
     let forward_separable = !unobservable[0]
         && !unobservable[1]
@@ -322,6 +274,76 @@ pub fn pose_fit(reference: &Trajectory, src: &Trajectory, offset_s: f64) -> Opti
         windows: eqs.len(),
         note,
     })
+}
+
+/// The spread of the body's up axis over the mission, radians.
+fn tilt_rad(reference: &Trajectory, src: &Trajectory) -> f64 {
+    let ups: Vec<Vector3<f64>> = samples(reference, src, 0.0)
+        .iter()
+        .map(|s| s.r_src * Vector3::z())
+        .collect();
+    let mean_up = ups.iter().sum::<Vector3<f64>>() / ups.len().max(1) as f64;
+    (ups.iter()
+        .map(|u| (u - mean_up).norm_squared())
+        .sum::<f64>()
+        / ups.len().max(1) as f64)
+        .sqrt()
+}
+
+type Solution = (
+    Vector3<f64>,
+    f64,
+    Vec<WindowEquations>,
+    Matrix4<f64>,
+    [bool; 4],
+);
+
+/// Gauss–Newton on (Δt correction, lever): the lever, the Δt correction, the windows' equations at
+/// the solution, the normal matrix's pseudo-inverse and which unknowns are unobservable.
+fn gauss_newton(reference: &Trajectory, src: &Trajectory, fixed: [bool; 4]) -> Option<Solution> {
+    let mut lever = Vector3::zeros();
+    let mut delta = 0.0;
+    let mut last: Option<(Vec<WindowEquations>, Matrix4<f64>, [bool; 4])> = None;
+    for _ in 0..20 {
+        let s = samples(reference, src, delta);
+        let eqs = equations(&s, &lever);
+        if eqs.len() < 3 {
+            return None;
+        }
+        let n: Matrix4<f64> = eqs.iter().map(|e| e.n).sum();
+        let b: Vector4<f64> = eqs.iter().map(|e| e.b).sum();
+        let (inv, unobservable) = pseudo_inverse(&n, fixed);
+        let step = inv * b;
+        // Steps bounded (0.5 s, 1 m) so that one poor linearisation cannot throw the fit away.
+        delta += step[0].clamp(-0.5, 0.5);
+        let dl = Vector3::new(step[1], step[2], step[3]);
+        lever += dl * (1.0 / dl.norm().max(1.0));
+        let done = step[0].abs() < 1e-5 && dl.norm() < 1e-4;
+        last = Some((eqs, inv, unobservable));
+        if done {
+            break;
+        }
+    }
+    let (eqs, inv, unobservable) = last?;
+    Some((lever, delta, eqs, inv, unobservable))
+}
+
+/// σ of the four unknowns by a jackknife over the windows of the linearised problem at the solution.
+fn jackknife_sigma(eqs: &[WindowEquations], fixed: [bool; 4]) -> Vector4<f64> {
+    let n_all: Matrix4<f64> = eqs.iter().map(|e| e.n).sum();
+    let b_all: Vector4<f64> = eqs.iter().map(|e| e.b).sum();
+    let w = eqs.len() as f64;
+    let leave_out: Vec<Vector4<f64>> = eqs
+        .iter()
+        .map(|e| pseudo_inverse(&(n_all - e.n), fixed).0 * (b_all - e.b))
+        .collect();
+    let mean = leave_out.iter().sum::<Vector4<f64>>() / w;
+    let var = leave_out
+        .iter()
+        .map(|x| (x - mean).component_mul(&(x - mean)))
+        .sum::<Vector4<f64>>()
+        * ((w - 1.0) / w);
+    var.map(f64::sqrt)
 }
 
 /// The lever from positions alone, from a source's evaluation against the reference.

@@ -165,29 +165,30 @@ fn span_s(t: &Trajectory) -> (f64, f64) {
         .map_or((0.0, 0.0), |(a, b)| (a as f64 * 1e-9, b as f64 * 1e-9))
 }
 
-fn build(
-    config: &AuditConfig,
-    found: &Discovered,
+/// The report of pair (a, b), when it was evaluated.
+fn pair_report(
+    evaluations: &[pairs::PairEvaluation],
+    a: usize,
+    b: usize,
+) -> Option<&EstimateReport> {
+    evaluations
+        .iter()
+        .find(|e| e.a == a && e.b == b)
+        .and_then(|e| e.result.as_ref().ok().map(|(r, _)| r))
+}
+
+/// Each source's clock against the reference (the reference's own first), with the span it covers on
+/// the reference clock.
+fn reference_clocks(
     sources: &[Loaded],
     evaluations: &[pairs::PairEvaluation],
-    read_warnings: Vec<Warning>,
-) -> Result<AuditReport> {
-    let evaluation = merged_evaluation(sources, evaluations, &read_warnings)?;
-    let n = sources.len();
-    let reference_span = span_s(&sources[0].trajectory);
-    let pair_report = |a: usize, b: usize| -> Option<&EstimateReport> {
-        evaluations
-            .iter()
-            .find(|e| e.a == a && e.b == b)
-            .and_then(|e| e.result.as_ref().ok().map(|(r, _)| r))
-    };
-    // Each source's clock against the reference, with the span it covers on the reference clock.
-    let mut clocks: Vec<Option<Clock>> =
-        vec![Some(Clock::reference(reference_span.0, reference_span.1))];
-    for b in 1..n {
-        clocks.push(pair_report(0, b).map(|r| {
+    reference_span: (f64, f64),
+) -> Vec<Option<Clock>> {
+    let mut clocks = vec![Some(Clock::reference(reference_span.0, reference_span.1))];
+    for (b, source) in sources.iter().enumerate().skip(1) {
+        clocks.push(pair_report(evaluations, 0, b).map(|r| {
             let c = ClockCorrection::from_report(&r.time_offset);
-            let cov = coverage::coverage(&sources[b].trajectory, &c, reference_span);
+            let cov = coverage::coverage(&source.trajectory, &c, reference_span);
             Clock::from_time_offset(
                 &r.time_offset,
                 (
@@ -197,25 +198,28 @@ fn build(
             )
         }));
     }
-    // Every measured pair.
+    clocks
+}
+
+/// Every measured pair, as listed and as a matrix (`[a][b]`, a < b).
+fn pair_offsets(
+    sources: &[Loaded],
+    evaluations: &[pairs::PairEvaluation],
+    clocks: &[Option<Clock>],
+) -> (Vec<PairOffset>, Vec<Vec<Option<Clock>>>) {
+    let n = sources.len();
     let mut pair_list = Vec::new();
     let mut pair_clock: Vec<Vec<Option<Clock>>> = vec![vec![None; n]; n];
     for e in evaluations {
         let Ok((r, _)) = &e.result else { continue };
-        let span = (
-            span_s(&sources[e.a].trajectory)
-                .0
-                .max(span_s(&sources[e.b].trajectory).0),
-            span_s(&sources[e.a].trajectory)
-                .1
-                .min(span_s(&sources[e.b].trajectory).1),
+        let (sa, sb) = (
+            span_s(&sources[e.a].trajectory),
+            span_s(&sources[e.b].trajectory),
         );
-        let clock = if e.a == 0 {
-            clocks[e.b]
-                .clone()
-                .unwrap_or_else(|| Clock::from_time_offset(&r.time_offset, span))
-        } else {
-            Clock::from_time_offset(&r.time_offset, span)
+        let span = (sa.0.max(sb.0), sa.1.min(sb.1));
+        let clock = match (e.a, &clocks[e.b]) {
+            (0, Some(c)) => c.clone(),
+            _ => Clock::from_time_offset(&r.time_offset, span),
         };
         pair_clock[e.a][e.b] = Some(clock.clone());
         pair_list.push(PairOffset {
@@ -225,12 +229,160 @@ fn build(
             overlap_s: e.overlap_s,
         });
     }
+    (pair_list, pair_clock)
+}
+
+/// A clock against the reference, in words: its model and its drift or segments.
+fn clock_words(c: &Clock) -> String {
+    match c.model {
+        crate::align::clock_model::OffsetModel::Linear => {
+            format!("{:+.1} ppm", c.drift_ppm.unwrap_or(f64::NAN))
+        }
+        _ => c
+            .segments
+            .iter()
+            .map(|s| format!("{:+.4} s", s.offset_s))
+            .collect::<Vec<_>>()
+            .join(" → "),
+    }
+}
+
+/// The sources whose clock against the reference is weak, not constant or missing, and the
+/// warnings of the missing ones.
+fn clock_findings(
+    sources: &[Loaded],
+    clocks: &[Option<Clock>],
+    evaluations: &[pairs::PairEvaluation],
+) -> (Vec<OutOfLine>, Vec<Warning>) {
+    let mut out_of_line = Vec::new();
+    let mut warnings = Vec::new();
+    let line = |name: &String, reason, detail: String| OutOfLine {
+        source: name.clone(),
+        reason,
+        detail,
+    };
+    for (b, source) in sources.iter().enumerate().skip(1) {
+        let name = &source.name;
+        match &clocks[b] {
+            Some(c) if c.status == TimeOffsetStatus::Weak => out_of_line.push(line(
+                name,
+                OutOfLineReason::WeakOffset,
+                format!("{name}: no confident offset against the reference"),
+            )),
+            Some(c) if !c.is_constant() => out_of_line.push(line(
+                name,
+                OutOfLineReason::ClockNotConstant,
+                format!(
+                    "{name}: {} clock against the reference ({})",
+                    c.model.as_str(),
+                    clock_words(c)
+                ),
+            )),
+            Some(_) => {}
+            None => {
+                let why = evaluations
+                    .iter()
+                    .find(|e| e.a == 0 && e.b == b)
+                    .and_then(|e| e.result.as_ref().err().cloned())
+                    .unwrap_or_default();
+                let detail = format!("{name}: not evaluated against the reference: {why}");
+                warnings.push(Warning::new(WarningCode::WeakTimeOffset, detail.clone()));
+                out_of_line.push(line(name, OutOfLineReason::WeakOffset, detail));
+            }
+        }
+    }
+    (out_of_line, warnings)
+}
+
+/// A source's lever arm: the 3-D fit with Δt from its orientation where it has one and its clock is
+/// confident, else lateral and forward from positions; none for the reference or an unevaluated one.
+fn lever_of(
+    reference: &Trajectory,
+    source: &Loaded,
+    clock: &Clock,
+    est: Option<&EstimateReport>,
+) -> Option<report::LeverFit> {
+    let e = est?;
+    if source.trajectory.orientations.is_none() || clock.status != TimeOffsetStatus::Ok {
+        return Some(lever::positions_lever(e));
+    }
+    let (t0, t1) = clock_span(clock);
+    let offset = clock.at(0.5 * (t0 + t1)).map_or(clock.offset_s, |x| x.0);
+    lever::pose_fit(
+        reference,
+        &clock.correction().apply(&source.trajectory),
+        offset,
+    )
+    .or_else(|| Some(lever::positions_lever(e)))
+}
+
+/// Source `i`'s line of the audit.
+fn source_audit(
+    i: usize,
+    sources: &[Loaded],
+    found: &Discovered,
+    evaluations: &[pairs::PairEvaluation],
+    clock: Option<Clock>,
+    domain: String,
+) -> SourceAudit {
+    let s = &sources[i];
+    let reference_span = span_s(&sources[0].trajectory);
+    let est = (i > 0).then(|| pair_report(evaluations, 0, i)).flatten();
+    let clock = clock.unwrap_or_else(|| Clock::reference(f64::NAN, f64::NAN));
+    let correction = if i == 0 {
+        ClockCorrection::Constant { dt_ns: 0 }
+    } else {
+        clock.correction()
+    };
+    let lever = (i > 0)
+        .then(|| lever_of(&sources[0].trajectory, s, &clock, est))
+        .flatten();
+    let de = est.and_then(|e| e.drift_error.first());
+    SourceAudit {
+        name: s.name.clone(),
+        topic: s.label.clone(),
+        type_name: s.type_name.clone(),
+        file: found.file_of(&s.label).map(|p| p.display().to_string()),
+        reference: i == 0,
+        samples: s.trajectory.len(),
+        rate_hz: coverage::median_period_s(&s.trajectory)
+            .filter(|p| *p > 0.0)
+            .map(|p| 1.0 / p),
+        gaps: coverage::gaps(&s.trajectory),
+        coverage: coverage::coverage(&s.trajectory, &correction, reference_span),
+        clock,
+        lever_m: if i == 0 {
+            Some([Some(0.0); 3])
+        } else {
+            lever.as_ref().map(|l| l.lever_m)
+        },
+        lever,
+        de_rmse: de.and_then(|d| d.rmse),
+        de_window_m: de.map(|d| d.window_m),
+        ape_rmse_m: est
+            .and_then(|e| e.standard_metrics.as_ref())
+            .and_then(|m| m.ape.as_ref())
+            .map(|a| a.stats.rmse),
+        domain,
+    }
+}
+
+fn build(
+    config: &AuditConfig,
+    found: &Discovered,
+    sources: &[Loaded],
+    evaluations: &[pairs::PairEvaluation],
+    read_warnings: Vec<Warning>,
+) -> Result<AuditReport> {
+    let evaluation = merged_evaluation(sources, evaluations, &read_warnings)?;
+    let reference_span = span_s(&sources[0].trajectory);
+    let clocks = reference_clocks(sources, evaluations, reference_span);
+    let (pair_list, pair_clock) = pair_offsets(sources, evaluations, &clocks);
     let pair = |a: usize, b: usize| pair_clock[a.min(b)][a.max(b)].clone();
     let names: Vec<String> = sources.iter().map(|s| s.name.clone()).collect();
     let spans: Vec<(f64, f64)> = sources.iter().map(|s| span_s(&s.trajectory)).collect();
     let judged = judge::judge(&names, &spans, &pair, reference_span);
-    let domain_of = judged.domain_of.clone();
-    // Warnings and sources out of line.
+    // The evaluation's lever warnings are the audit's lever fit's business.
     let mut warnings: Vec<Warning> = evaluation
         .warnings
         .iter()
@@ -242,111 +394,16 @@ fn build(
         })
         .cloned()
         .collect();
-    let mut out_of_line = Vec::new();
-    for b in 1..n {
-        let name = &sources[b].name;
-        match (&clocks[b], pair_report(0, b)) {
-            (Some(c), _) if c.status == TimeOffsetStatus::Weak => out_of_line.push(OutOfLine {
-                source: name.clone(),
-                reason: OutOfLineReason::WeakOffset,
-                detail: format!("{name}: no confident offset against the reference"),
-            }),
-            (Some(c), _) if !c.is_constant() => out_of_line.push(OutOfLine {
-                source: name.clone(),
-                reason: OutOfLineReason::ClockNotConstant,
-                detail: format!(
-                    "{name}: {} clock against the reference ({})",
-                    c.model.as_str(),
-                    match c.model {
-                        crate::align::clock_model::OffsetModel::Linear =>
-                            format!("{:+.1} ppm", c.drift_ppm.unwrap_or(f64::NAN)),
-                        _ => c
-                            .segments
-                            .iter()
-                            .map(|s| format!("{:+.4} s", s.offset_s))
-                            .collect::<Vec<_>>()
-                            .join(" → "),
-                    }
-                ),
-            }),
-            (None, _) => {
-                let why = evaluations
-                    .iter()
-                    .find(|e| e.a == 0 && e.b == b)
-                    .and_then(|e| e.result.as_ref().err().cloned())
-                    .unwrap_or_default();
-                warnings.push(Warning::new(
-                    WarningCode::WeakTimeOffset,
-                    format!("{name}: not evaluated against the reference: {why}"),
-                ));
-                out_of_line.push(OutOfLine {
-                    source: name.clone(),
-                    reason: OutOfLineReason::WeakOffset,
-                    detail: format!("{name}: not evaluated against the reference: {why}"),
-                });
-            }
-            _ => {}
-        }
-    }
+    let (mut out_of_line, missing) = clock_findings(sources, &clocks, evaluations);
+    warnings.extend(missing);
     out_of_line.extend(judged.out_of_line);
     warnings.extend(judged.warning);
-    // Per source.
-    let mut source_list = Vec::with_capacity(n);
-    for (i, s) in sources.iter().enumerate() {
-        let est = (i > 0).then(|| pair_report(0, i)).flatten();
-        let clock = clocks[i]
-            .clone()
-            .unwrap_or_else(|| Clock::reference(f64::NAN, f64::NAN));
-        let correction = if i == 0 {
-            ClockCorrection::Constant { dt_ns: 0 }
-        } else {
-            clock.correction()
-        };
-        let lever = match (i, est) {
-            (0, _) | (_, None) => None,
-            (_, Some(e))
-                if s.trajectory.orientations.is_some() && clock.status == TimeOffsetStatus::Ok =>
-            {
-                let mid = 0.5 * (clock_span(&clock).0 + clock_span(&clock).1);
-                let offset = clock.at(mid).map_or(clock.offset_s, |x| x.0);
-                lever::pose_fit(
-                    &sources[0].trajectory,
-                    &correction.apply(&s.trajectory),
-                    offset,
-                )
-                .or_else(|| Some(lever::positions_lever(e)))
-            }
-            (_, Some(e)) => Some(lever::positions_lever(e)),
-        };
-        let de = est.and_then(|e| e.drift_error.first());
-        source_list.push(SourceAudit {
-            name: s.name.clone(),
-            topic: s.label.clone(),
-            type_name: s.type_name.clone(),
-            file: found.file_of(&s.label).map(|p| p.display().to_string()),
-            reference: i == 0,
-            samples: s.trajectory.len(),
-            rate_hz: coverage::median_period_s(&s.trajectory)
-                .filter(|p| *p > 0.0)
-                .map(|p| 1.0 / p),
-            gaps: coverage::gaps(&s.trajectory),
-            coverage: coverage::coverage(&s.trajectory, &correction, reference_span),
-            clock,
-            lever_m: if i == 0 {
-                Some([Some(0.0); 3])
-            } else {
-                lever.as_ref().map(|l| l.lever_m)
-            },
-            lever,
-            de_rmse: de.and_then(|d| d.rmse),
-            de_window_m: de.map(|d| d.window_m),
-            ape_rmse_m: est
-                .and_then(|e| e.standard_metrics.as_ref())
-                .and_then(|m| m.ape.as_ref())
-                .map(|a| a.stats.rmse),
-            domain: domain_of[i].clone(),
-        });
-    }
+    let source_list = (0..sources.len())
+        .map(|i| {
+            let domain = judged.domain_of[i].clone();
+            source_audit(i, sources, found, evaluations, clocks[i].clone(), domain)
+        })
+        .collect();
     Ok(AuditReport {
         kind: AUDIT_KIND.into(),
         schema_version: AUDIT_SCHEMA_VERSION,

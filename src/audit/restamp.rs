@@ -228,6 +228,55 @@ pub fn check_output(recordings: &[PathBuf], out: &Path, force: bool) -> Result<(
     Ok(())
 }
 
+/// What is copied: one MCAP (copied record by record), a mission of several files, or one recording
+/// of another format.
+enum Input {
+    Mcap(PathBuf),
+    Mission(Mission),
+    One(Part),
+}
+
+impl Input {
+    fn open(files: &[PathBuf]) -> Result<Input> {
+        match files {
+            [one] if !one.is_dir() && crate::sources::mcap::McapSource::open(one).is_ok() => {
+                Ok(Input::Mcap(one.clone()))
+            }
+            [one] => Ok(Input::One(crate::sources::open::open_recording(one)?)),
+            _ => {
+                let parts = files
+                    .iter()
+                    .map(|p| crate::sources::open::open_recording(p))
+                    .collect::<Result<Vec<Part>>>()?;
+                Ok(Input::Mission(Mission::new(&files[0], parts)?))
+            }
+        }
+    }
+
+    /// The files as the copy names them (the plan's file scopes are compared with these).
+    fn part_files(&self, files: &[PathBuf]) -> Vec<PathBuf> {
+        match self {
+            Input::Mission(m) => m.parts().iter().map(|p| p.path().to_path_buf()).collect(),
+            _ => vec![files[0].clone()],
+        }
+    }
+
+    /// The input's compression and other facts (MCAP), and the profile of the copy (others).
+    fn info_and_profile(&self) -> Result<(InputInfo, String)> {
+        Ok(match self {
+            Input::Mcap(p) => (read_input_info(p), String::new()),
+            Input::Mission(m) => (
+                InputInfo::default(),
+                any_input::profile(&m.channel_counts()?.0).to_string(),
+            ),
+            Input::One(r) => (
+                InputInfo::default(),
+                any_input::profile(&r.channel_counts()?.0).to_string(),
+            ),
+        })
+    }
+}
+
 /// Writes the restamped copy of `recordings` to `out` by `plan` (made from `audit`).
 pub fn restamp(
     recordings: &[PathBuf],
@@ -239,53 +288,18 @@ pub fn restamp(
 ) -> Result<RestampOutcome> {
     check_output(recordings, out, force)?;
     let files = super::discover::expand_files(recordings)?;
-    let single_mcap = match files.as_slice() {
-        [one] if !one.is_dir() && crate::sources::mcap::McapSource::open(one).is_ok() => {
-            Some(one.clone())
-        }
-        _ => None,
-    };
-    let mission = match (&single_mcap, files.len()) {
-        (None, n) if n > 1 => {
-            let parts = files
-                .iter()
-                .map(|p| crate::sources::open::open_recording(p))
-                .collect::<Result<Vec<Part>>>()?;
-            Some(Mission::new(&files[0], parts)?)
-        }
-        _ => None,
-    };
-    let single = match (&single_mcap, &mission) {
-        (None, None) => Some(crate::sources::open::open_recording(&files[0])?),
-        _ => None,
-    };
-    let part_files: Vec<PathBuf> = match (&mission, &single) {
-        (Some(m), _) => m.parts().iter().map(|p| p.path().to_path_buf()).collect(),
-        _ => vec![files[0].clone()],
-    };
-    // MCAP file names in the plan are as the audit wrote them; compare them as the parts name them.
+    let input = Input::open(&files)?;
     let mut restamper = Restamper {
         output: out.to_path_buf(),
         plan,
         audit,
-        part_files,
+        part_files: input.part_files(&files),
         routes: HashMap::new(),
         streams: HashMap::new(),
         moved: vec![0; plan.domains.len()],
         last_log_time: 0,
     };
-    let (info, profile) = match (&single_mcap, &mission, &single) {
-        (Some(p), _, _) => (read_input_info(p), String::new()),
-        (None, Some(m), _) => (
-            InputInfo::default(),
-            any_input::profile(&m.channel_counts()?.0).to_string(),
-        ),
-        (None, None, Some(r)) => (
-            InputInfo::default(),
-            any_input::profile(&r.channel_counts()?.0).to_string(),
-        ),
-        _ => (InputInfo::default(), String::new()),
-    };
+    let (info, profile) = input.info_and_profile()?;
     let options = mcap::WriteOptions::new()
         .compression(info.output_compression())
         .library(concat!("trajdrift ", env!("CARGO_PKG_VERSION")));
@@ -295,9 +309,9 @@ pub fn restamp(
     };
     let mut target = OutputFile::create(out)?;
     let file = std::io::BufWriter::new(target.file().try_clone().map_err(out_err)?);
-    let (copy, mut sink) = match (&single_mcap, &mission, &single) {
-        (Some(p), _, _) => copy_with(p, file, out, options, &mut restamper, progress)?,
-        (None, Some(m), _) => any_input::copy_recording(
+    let (copy, mut sink) = match &input {
+        Input::Mcap(p) => copy_with(p, file, out, options, &mut restamper, progress)?,
+        Input::Mission(m) => any_input::copy_recording(
             CopyInput::Parts(m),
             file,
             out,
@@ -306,7 +320,7 @@ pub fn restamp(
             &mut restamper,
             progress,
         )?,
-        (None, None, Some(r)) => any_input::copy_recording(
+        Input::One(r) => any_input::copy_recording(
             CopyInput::One(r as &dyn Recording),
             file,
             out,
@@ -315,7 +329,6 @@ pub fn restamp(
             &mut restamper,
             progress,
         )?,
-        _ => return Err(Error::InvalidArgument("restamp needs a recording".into())),
     };
     sink.flush().map_err(out_err)?;
     drop(sink);

@@ -99,6 +99,33 @@ fn message_topic(topic: &str) -> &str {
     }
 }
 
+type SourceRef<'a> = &'a super::report::SourceAudit;
+
+/// The audit's domain holding `source`.
+fn domain_of<'a>(audit: &'a AuditReport, source: &str) -> Option<&'a super::report::Domain> {
+    audit
+        .domains
+        .iter()
+        .find(|d| d.sources.iter().any(|s| s == source))
+}
+
+/// A planned domain moved by the audit's domain `d`.
+fn moved_by(
+    name: String,
+    scope: Scope,
+    sources: Vec<String>,
+    d: &super::report::Domain,
+) -> RestampDomain {
+    RestampDomain {
+        name,
+        scope,
+        sources,
+        audit_domain: d.name.clone(),
+        clock: d.clock.clone(),
+        correction: d.clock.correction(),
+    }
+}
+
 /// Plans the restamp of a mission of `files` (one entry: a single recording) by `audit`, with the
 /// user's `--domain` specs.
 pub fn plan(
@@ -107,16 +134,53 @@ pub fn plan(
     domains: &[(String, Vec<String>)],
 ) -> Result<RestampPlan> {
     let mut notes = Vec::new();
-    let audit_domain = |source: &str| -> Option<&super::report::Domain> {
-        audit
-            .domains
+    let movable = movable_sources(audit, &mut notes);
+    let mut out: Vec<RestampDomain> = Vec::new();
+    let mut claimed_topics: Vec<String> = Vec::new();
+    // --domain first.
+    for (name, topics) in domains {
+        claimed_topics.extend(topics.iter().cloned());
+        out.extend(user_domain(audit, name, topics, &mut notes)?);
+    }
+    // Defaults: the file of each source (several files), else its topic.
+    let mut by_file: BTreeMap<PathBuf, Vec<SourceRef<'_>>> = BTreeMap::new();
+    let mut alone: Vec<SourceRef<'_>> = Vec::new();
+    for s in movable {
+        if claimed_topics
             .iter()
-            .find(|d| d.sources.iter().any(|s| s == source))
-    };
-    // The sources that can move: not the reference's domain, with a confident clock.
-    let mut movable: Vec<&super::report::SourceAudit> = Vec::new();
+            .any(|t| t == &s.topic || t == message_topic(&s.topic))
+        {
+            continue;
+        }
+        match (&s.file, files.len() > 1) {
+            (Some(f), true) => by_file.entry(PathBuf::from(f)).or_default().push(s),
+            _ => alone.push(s),
+        }
+    }
+    for (file, members) in by_file {
+        match file_domain(audit, &file, &members, &mut notes) {
+            Some(d) => out.push(d),
+            None => alone.extend(members),
+        }
+    }
+    for s in alone {
+        let Some(d) = domain_of(audit, &s.name) else {
+            continue;
+        };
+        let scope = Scope::Topics(vec![message_topic(&s.topic).to_string()]);
+        out.push(moved_by(s.name.clone(), scope, vec![s.name.clone()], d));
+    }
+    Ok(RestampPlan {
+        domains: out,
+        notes,
+    })
+}
+
+/// The sources that can move: not in the reference's domain, with a confident clock.
+fn movable_sources<'a>(audit: &'a AuditReport, notes: &mut Vec<String>) -> Vec<SourceRef<'a>> {
+    let mut movable = Vec::new();
     for s in audit.sources.iter().filter(|s| !s.reference) {
-        let Some(d) = audit_domain(&s.name) else {
+        let Some(d) = domain_of(audit, &s.name) else {
             continue;
         };
         if d.reference {
@@ -131,134 +195,102 @@ pub fn plan(
         }
         movable.push(s);
     }
-    let mut out: Vec<RestampDomain> = Vec::new();
-    let mut claimed_topics: Vec<String> = Vec::new();
-    // --domain first.
-    for (name, topics) in domains {
-        let members: Vec<&super::report::SourceAudit> = audit
-            .sources
-            .iter()
-            .filter(|s| {
-                topics
-                    .iter()
-                    .any(|t| t == message_topic(&s.topic) || *t == s.topic)
-            })
-            .collect();
-        if members.is_empty() {
-            return Err(Error::InvalidArgument(format!(
-                "--domain {name}: none of its topics ({}) is a source of the audit, so its clock is unknown; add one the audit evaluated",
-                topics.join(", ")
-            )));
-        }
-        let mut homes: BTreeMap<String, Vec<String>> = BTreeMap::new();
-        for m in &members {
-            if let Some(d) = audit_domain(&m.name) {
-                homes
-                    .entry(d.name.clone())
-                    .or_default()
-                    .push(m.name.clone());
-            }
-        }
-        if homes.len() > 1 {
-            return Err(Error::InvalidArgument(format!(
-                "--domain {name}: its sources are on different clocks ({}); split it",
-                homes
-                    .iter()
-                    .map(|(d, s)| format!("{} in clock domain {d}", s.join(", ")))
-                    .collect::<Vec<_>>()
-                    .join("; ")
-            )));
-        }
-        claimed_topics.extend(topics.iter().cloned());
-        let Some((home, _)) = homes.into_iter().next() else {
-            continue;
-        };
-        let Some(d) = audit.domains.iter().find(|d| d.name == home) else {
-            continue;
-        };
-        if d.reference {
-            notes.push(format!(
-                "--domain {name}: on the reference's clock; left unchanged"
-            ));
-            continue;
-        }
-        out.push(RestampDomain {
-            name: name.clone(),
-            scope: Scope::Topics(topics.clone()),
-            sources: members.iter().map(|m| m.name.clone()).collect(),
-            audit_domain: d.name.clone(),
-            clock: d.clock.clone(),
-            correction: d.clock.correction(),
-        });
+    movable
+}
+
+/// A `--domain NAME=TOPIC,…`: moved by the clock of the audited sources among its topics, which must
+/// share one; `None` when that clock is the reference's.
+fn user_domain(
+    audit: &AuditReport,
+    name: &str,
+    topics: &[String],
+    notes: &mut Vec<String>,
+) -> Result<Option<RestampDomain>> {
+    let members: Vec<SourceRef<'_>> = audit
+        .sources
+        .iter()
+        .filter(|s| {
+            topics
+                .iter()
+                .any(|t| t == message_topic(&s.topic) || *t == s.topic)
+        })
+        .collect();
+    if members.is_empty() {
+        return Err(Error::InvalidArgument(format!(
+            "--domain {name}: none of its topics ({}) is a source of the audit, so its clock is unknown; add one the audit evaluated",
+            topics.join(", ")
+        )));
     }
-    // Defaults: the file of each source (several files), else its topic.
-    let mut by_file: BTreeMap<PathBuf, Vec<&super::report::SourceAudit>> = BTreeMap::new();
-    let mut alone: Vec<&super::report::SourceAudit> = Vec::new();
-    for s in movable {
-        if claimed_topics
-            .iter()
-            .any(|t| t == &s.topic || t == message_topic(&s.topic))
-        {
-            continue;
-        }
-        match (&s.file, files.len() > 1) {
-            (Some(f), true) => by_file.entry(PathBuf::from(f)).or_default().push(s),
-            _ => alone.push(s),
+    let mut homes: BTreeMap<String, Vec<String>> = BTreeMap::new();
+    for m in &members {
+        if let Some(d) = domain_of(audit, &m.name) {
+            homes
+                .entry(d.name.clone())
+                .or_default()
+                .push(m.name.clone());
         }
     }
-    for (file, members) in by_file {
-        // Every audited source in the file must be on one clock (the reference's sources too).
-        let in_file: Vec<&super::report::SourceAudit> = audit
-            .sources
-            .iter()
-            .filter(|s| s.file.as_deref() == Some(&*file.to_string_lossy()))
-            .collect();
-        let mut homes: Vec<&str> = in_file
-            .iter()
-            .filter_map(|s| audit_domain(&s.name).map(|d| d.name.as_str()))
-            .collect();
-        homes.sort_unstable();
-        homes.dedup();
-        if homes.len() == 1 {
-            let Some(d) = audit_domain(&members[0].name) else {
-                continue;
-            };
-            out.push(RestampDomain {
-                name: file.file_name().map_or_else(
-                    || file.display().to_string(),
-                    |n| n.to_string_lossy().into_owned(),
-                ),
-                scope: Scope::File(file.clone()),
-                sources: members.iter().map(|m| m.name.clone()).collect(),
-                audit_domain: d.name.clone(),
-                clock: d.clock.clone(),
-                correction: d.clock.correction(),
-            });
-        } else {
-            notes.push(format!(
-                "{}: holds sources of {} clocks ({}); each source's topic is moved alone (give --domain to move more of the file)",
-                file.display(),
-                homes.len(),
-                homes.join(", ")
-            ));
-            alone.extend(members);
-        }
+    if homes.len() > 1 {
+        return Err(Error::InvalidArgument(format!(
+            "--domain {name}: its sources are on different clocks ({}); split it",
+            homes
+                .iter()
+                .map(|(d, s)| format!("{} in clock domain {d}", s.join(", ")))
+                .collect::<Vec<_>>()
+                .join("; ")
+        )));
     }
-    for s in alone {
-        let Some(d) = audit_domain(&s.name) else {
-            continue;
-        };
-        out.push(RestampDomain {
-            name: s.name.clone(),
-            scope: Scope::Topics(vec![message_topic(&s.topic).to_string()]),
-            sources: vec![s.name.clone()],
-            audit_domain: d.name.clone(),
-            clock: d.clock.clone(),
-            correction: d.clock.correction(),
-        });
+    let Some((home, _)) = homes.into_iter().next() else {
+        return Ok(None);
+    };
+    let Some(d) = audit.domains.iter().find(|d| d.name == home) else {
+        return Ok(None);
+    };
+    if d.reference {
+        notes.push(format!(
+            "--domain {name}: on the reference's clock; left unchanged"
+        ));
+        return Ok(None);
     }
-    Ok(RestampPlan {
-        domains: out,
-        notes,
-    })
+    let sources = members.iter().map(|m| m.name.clone()).collect();
+    Ok(Some(moved_by(
+        name.to_string(),
+        Scope::Topics(topics.to_vec()),
+        sources,
+        d,
+    )))
+}
+
+/// A file of the mission moved as one domain, when every audited source in it (the reference's
+/// too) is on one clock; `None` (with a note) when not: its sources then move alone.
+fn file_domain(
+    audit: &AuditReport,
+    file: &Path,
+    members: &[SourceRef<'_>],
+    notes: &mut Vec<String>,
+) -> Option<RestampDomain> {
+    let mut homes: Vec<&str> = audit
+        .sources
+        .iter()
+        .filter(|s| s.file.as_deref() == Some(&*file.to_string_lossy()))
+        .filter_map(|s| domain_of(audit, &s.name).map(|d| d.name.as_str()))
+        .collect();
+    homes.sort_unstable();
+    homes.dedup();
+    if homes.len() != 1 {
+        notes.push(format!(
+            "{}: holds sources of {} clocks ({}); each source's topic is moved alone (give --domain to move more of the file)",
+            file.display(),
+            homes.len(),
+            homes.join(", ")
+        ));
+        return None;
+    }
+    let d = domain_of(audit, &members.first()?.name)?;
+    let name = file.file_name().map_or_else(
+        || file.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    let sources = members.iter().map(|m| m.name.clone()).collect();
+    Some(moved_by(name, Scope::File(file.to_path_buf()), sources, d))
 }

@@ -74,15 +74,45 @@ pub fn render(a: &AuditReport) -> String {
         .max()
         .unwrap_or(6)
         .max(6);
+    s += &sources_lines(a, w, t0);
+    s += &matrix_lines(a, w);
+    s += &closure_lines(a);
+    s += &domain_lines(a, w, t0);
+    if !a.out_of_line.is_empty() {
+        let _ = writeln!(s, "\nout of line:");
+        let mut details: Vec<&str> = Vec::new();
+        for o in &a.out_of_line {
+            if !details.contains(&o.detail.as_str()) {
+                details.push(&o.detail);
+                let _ = writeln!(s, "  {}", escape(&o.detail));
+            }
+        }
+    }
+    for w in &a.warnings {
+        let _ = writeln!(s, "\nwarning [{}]: {}", w.code, escape(&w.message));
+    }
+    s
+}
+
+/// One line per source.
+fn sources_lines(a: &AuditReport, w: usize, t0: f64) -> String {
+    let mut s = String::new();
+    let dw = a
+        .sources
+        .iter()
+        .map(|x| x.domain.chars().count())
+        .max()
+        .unwrap_or(6)
+        .max(6);
     let _ = writeln!(
         s,
-        "\n{:<w$}  {:>6}  {:>4}  {:>6}  {:>7}  {:>7}  {:<8}  {:<20}  clock against the reference",
+        "\n{:<w$}  {:>6}  {:>4}  {:>6}  {:>7}  {:>7}  {:<dw$}  {:<20}  clock against the reference",
         "source", "Hz", "gaps", "cover", "DE", "APE m", "domain", "lever x y z (m)"
     );
     for x in &a.sources {
         let _ = writeln!(
             s,
-            "{:<w$}  {:>6}  {:>4}  {:>5.0}%  {:>7}  {:>7}  {:<8}  {:<20}  {}",
+            "{:<w$}  {:>6}  {:>4}  {:>5.0}%  {:>7}  {:>7}  {:<dw$}  {:<20}  {}",
             escape(&x.name),
             x.rate_hz.map_or("–".into(), |r| format!("{r:.1}")),
             x.gaps.count,
@@ -95,7 +125,12 @@ pub fn render(a: &AuditReport) -> String {
             describe_clock(&x.clock, t0)
         );
     }
-    // The offset matrix: row A, column B, Δt_AB (B's stamps onto A's clock).
+    s
+}
+
+/// The offset matrix: row A, column B, Δt_AB (B's stamps onto A's clock).
+fn matrix_lines(a: &AuditReport, w: usize) -> String {
+    let mut s = String::new();
     let names: Vec<&str> = a.sources.iter().map(|x| x.name.as_str()).collect();
     let _ = writeln!(
         s,
@@ -140,6 +175,12 @@ pub fn render(a: &AuditReport) -> String {
         }
         s.push('\n');
     }
+    s
+}
+
+/// The closure: counts, the largest residual, every failing triple.
+fn closure_lines(a: &AuditReport) -> String {
+    let mut s = String::new();
     let failed = a.closure.iter().filter(|c| !c.consistent).count();
     let _ = writeln!(
         s,
@@ -173,6 +214,12 @@ pub fn render(a: &AuditReport) -> String {
             c.p_value
         );
     }
+    s
+}
+
+/// The clock domains.
+fn domain_lines(a: &AuditReport, w: usize, t0: f64) -> String {
+    let mut s = String::new();
     let _ = writeln!(s, "\nclock domains:");
     for d in &a.domains {
         let _ = writeln!(
@@ -186,15 +233,6 @@ pub fn render(a: &AuditReport) -> String {
             },
             escape(&d.sources.join(", "))
         );
-    }
-    if !a.out_of_line.is_empty() {
-        let _ = writeln!(s, "\nout of line:");
-        for o in &a.out_of_line {
-            let _ = writeln!(s, "  {}", escape(&o.detail));
-        }
-    }
-    for w in &a.warnings {
-        let _ = writeln!(s, "\nwarning [{}]: {}", w.code, escape(&w.message));
     }
     s
 }

@@ -19,6 +19,7 @@ use super::run::{BatchEvent, BatchProgress};
 use crate::audit::discover::SourceRequest;
 use crate::audit::report::{AuditReport, OutOfLine};
 use crate::audit::{audit, AuditConfig};
+use crate::diag::WarningCode;
 use crate::error::{Error, Result};
 use crate::eval::config::TrajectoryInput;
 use crate::eval::parameters::Parameters;
@@ -128,6 +129,14 @@ pub struct DomainLine {
     pub clock: String,
 }
 
+/// Whether a mission was audited.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MissionStatus {
+    Ok,
+    Failed,
+}
+
 /// One mission's line of the summary (and the head of `<mission>.audit.json` when it failed).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MissionAudit {
@@ -135,8 +144,7 @@ pub struct MissionAudit {
     pub kind: String,
     pub mission: String,
     pub recordings: Vec<String>,
-    /// `ok` or `failed`.
-    pub status: String,
+    pub status: MissionStatus,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub error: Option<String>,
     pub reference: Option<String>,
@@ -144,7 +152,7 @@ pub struct MissionAudit {
     pub domains: Vec<DomainLine>,
     pub out_of_line: Vec<OutOfLine>,
     /// Warning codes, one per warning.
-    pub warnings: Vec<String>,
+    pub warnings: Vec<WarningCode>,
     pub seconds: f64,
 }
 
@@ -157,7 +165,7 @@ pub struct AuditSummary {
 impl AuditSummary {
     /// 1 when a mission failed, else 3 when a mission warned, else 0.
     pub fn exit_code(&self) -> u8 {
-        if self.missions.iter().any(|m| m.status != "ok") {
+        if self.missions.iter().any(|m| m.status != MissionStatus::Ok) {
             1
         } else if self.missions.iter().any(|m| !m.warnings.is_empty()) {
             3
@@ -172,7 +180,7 @@ impl AuditSummary {
         s.push_str("| mission | sources | clock domains | out of line | warnings |\n|---|---:|---:|---|---|\n");
         let cell = |t: &str| t.replace('|', "\\|");
         for m in &self.missions {
-            if m.status != "ok" {
+            if m.status != MissionStatus::Ok {
                 let _ = writeln!(
                     s,
                     "| {} | – | – | failed: {} | |",
@@ -194,10 +202,20 @@ impl AuditSummary {
                         .collect::<Vec<_>>()
                         .join(", ")
                 ),
-                cell(&m.warnings.join(", "))
+                cell(
+                    &m.warnings
+                        .iter()
+                        .map(|w| w.to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
             );
         }
-        for m in self.missions.iter().filter(|m| m.status == "ok") {
+        for m in self
+            .missions
+            .iter()
+            .filter(|m| m.status == MissionStatus::Ok)
+        {
             let _ = writeln!(
                 s,
                 "\n## {}\n\nreference {}\n\n| clock domain | sources | clock against the reference |\n|---|---|---|",
@@ -236,7 +254,7 @@ fn line_of(name: &str, recordings: &[PathBuf], a: &AuditReport, seconds: f64) ->
         kind: MISSION_AUDIT_KIND.into(),
         mission: name.into(),
         recordings: recordings.iter().map(|p| p.display().to_string()).collect(),
-        status: "ok".into(),
+        status: MissionStatus::Ok,
         error: None,
         reference: Some(a.reference.clone()),
         sources: a.sources.len(),
@@ -255,7 +273,7 @@ fn line_of(name: &str, recordings: &[PathBuf], a: &AuditReport, seconds: f64) ->
             })
             .collect(),
         out_of_line: a.out_of_line.clone(),
-        warnings: a.warnings.iter().map(|w| w.code.to_string()).collect(),
+        warnings: a.warnings.iter().map(|w| w.code).collect(),
         seconds,
     }
 }
@@ -269,6 +287,31 @@ pub fn run_audit_batch(
     html: bool,
     progress: BatchProgress<'_>,
 ) -> Result<AuditSummary> {
+    claim_outputs(missions, out_dir, html)?;
+    progress(BatchEvent::Planned {
+        missions: missions.len(),
+    });
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .map_err(|e| Error::InvalidArgument(format!("--jobs {jobs}: {e}")))?;
+    let lines: Vec<Result<MissionAudit>> = pool.install(|| {
+        missions
+            .par_iter()
+            .map(|m| audit_mission(m, out_dir, html, progress))
+            .collect()
+    });
+    let mut missions_out = lines.into_iter().collect::<Result<Vec<_>>>()?;
+    missions_out.sort_by(|a, b| a.mission.cmp(&b.mission));
+    let summary = AuditSummary {
+        missions: missions_out,
+    };
+    summary.write(out_dir)?;
+    Ok(summary)
+}
+
+/// Every output claimed before any work: the summary, each mission's audit and page.
+fn claim_outputs(missions: &[AuditMission], out_dir: &Path, html: bool) -> Result<()> {
     std::fs::create_dir_all(out_dir).map_err(|e| Error::Output {
         path: out_dir.to_path_buf(),
         detail: e.to_string(),
@@ -284,86 +327,76 @@ pub fn run_audit_batch(
             guard.claim("--html", &out_dir.join(format!("{}.audit.html", m.name)))?;
         }
     }
-    progress(BatchEvent::Planned {
-        missions: missions.len(),
+    Ok(())
+}
+
+/// Audits one mission and writes its audit (and page): its line of the summary, `failed` with the
+/// error when the audit failed.
+fn audit_mission(
+    m: &AuditMission,
+    out_dir: &Path,
+    html: bool,
+    progress: BatchProgress<'_>,
+) -> Result<MissionAudit> {
+    let start = Instant::now();
+    let bytes = m
+        .recordings
+        .iter()
+        .map(|p| crate::sources::open::input_size(p))
+        .sum();
+    progress(BatchEvent::Started {
+        mission: &m.name,
+        bytes,
     });
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs)
-        .build()
-        .map_err(|e| Error::InvalidArgument(format!("--jobs {jobs}: {e}")))?;
-    let lines: Vec<Result<MissionAudit>> = pool.install(|| {
-        missions
-            .par_iter()
-            .map(|m| {
-                let start = Instant::now();
-                let bytes = m
+    let config = AuditConfig {
+        recordings: m.recordings.clone(),
+        request: m.request.clone(),
+        params: m.params.clone(),
+    };
+    let outcome = audit(&config, &|b| {
+        progress(BatchEvent::Read {
+            mission: &m.name,
+            bytes: b,
+        })
+    });
+    progress(BatchEvent::Finished {
+        mission: &m.name,
+        ok: outcome.is_ok(),
+    });
+    let seconds = start.elapsed().as_secs_f64();
+    let path = out_dir.join(format!("{}.audit.json", m.name));
+    match outcome {
+        Ok(o) => {
+            write_json(&path, &o.report)?;
+            if html {
+                let page = crate::audit::html::render(&o.report)?;
+                write_output(
+                    &out_dir.join(format!("{}.audit.html", m.name)),
+                    page.as_bytes(),
+                )?;
+            }
+            Ok(line_of(&m.name, &m.recordings, &o.report, seconds))
+        }
+        Err(e) => {
+            let line = MissionAudit {
+                kind: MISSION_AUDIT_KIND.into(),
+                mission: m.name.clone(),
+                recordings: m
                     .recordings
                     .iter()
-                    .map(|p| crate::sources::open::input_size(p))
-                    .sum();
-                progress(BatchEvent::Started {
-                    mission: &m.name,
-                    bytes,
-                });
-                let config = AuditConfig {
-                    recordings: m.recordings.clone(),
-                    request: m.request.clone(),
-                    params: m.params.clone(),
-                };
-                let outcome = audit(&config, &|b| {
-                    progress(BatchEvent::Read {
-                        mission: &m.name,
-                        bytes: b,
-                    })
-                });
-                progress(BatchEvent::Finished {
-                    mission: &m.name,
-                    ok: outcome.is_ok(),
-                });
-                let seconds = start.elapsed().as_secs_f64();
-                let path = out_dir.join(format!("{}.audit.json", m.name));
-                match outcome {
-                    Ok(o) => {
-                        write_json(&path, &o.report)?;
-                        if html {
-                            let page = crate::audit::html::render(&o.report)?;
-                            write_output(
-                                &out_dir.join(format!("{}.audit.html", m.name)),
-                                page.as_bytes(),
-                            )?;
-                        }
-                        Ok(line_of(&m.name, &m.recordings, &o.report, seconds))
-                    }
-                    Err(e) => {
-                        let line = MissionAudit {
-                            kind: MISSION_AUDIT_KIND.into(),
-                            mission: m.name.clone(),
-                            recordings: m
-                                .recordings
-                                .iter()
-                                .map(|p| p.display().to_string())
-                                .collect(),
-                            status: "failed".into(),
-                            error: Some(e.to_string()),
-                            reference: None,
-                            sources: 0,
-                            domains: Vec::new(),
-                            out_of_line: Vec::new(),
-                            warnings: Vec::new(),
-                            seconds,
-                        };
-                        write_json(&path, &line)?;
-                        Ok(line)
-                    }
-                }
-            })
-            .collect()
-    });
-    let mut missions_out = lines.into_iter().collect::<Result<Vec<_>>>()?;
-    missions_out.sort_by(|a, b| a.mission.cmp(&b.mission));
-    let summary = AuditSummary {
-        missions: missions_out,
-    };
-    summary.write(out_dir)?;
-    Ok(summary)
+                    .map(|p| p.display().to_string())
+                    .collect(),
+                status: MissionStatus::Failed,
+                error: Some(e.to_string()),
+                reference: None,
+                sources: 0,
+                domains: Vec::new(),
+                out_of_line: Vec::new(),
+                warnings: Vec::new(),
+                seconds,
+            };
+            write_json(&path, &line)?;
+            Ok(line)
+        }
+    }
 }

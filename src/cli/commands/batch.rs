@@ -48,7 +48,11 @@ fn run_audit(a: &BatchArgs) -> Result<u8> {
         eprintln!(
             "{} missions audited, {} failed; results in {}",
             summary.missions.len(),
-            summary.missions.iter().filter(|m| m.status != "ok").count(),
+            summary
+                .missions
+                .iter()
+                .filter(|m| m.status != trajdrift::batch::audit::MissionStatus::Ok)
+                .count(),
             a.out.display()
         );
     }

@@ -468,30 +468,7 @@ pub fn write_multi_clock(
     std::fs::create_dir_all(dir).map_err(|e| Error::output(dir, &e))?;
     let c = &mission.config;
     let t0 = c.start_time_ns;
-    let lever_of = |name: &str| {
-        c.sources
-            .iter()
-            .find(|s| s.name == name)
-            .map_or(Vector3::zeros(), |s| Vector3::from(s.lever_m))
-    };
-    let iso =
-        |v: Vector3<f64>| Isometry3::from_parts(Translation3::from(v), UnitQuaternion::identity());
-    let mut all = vec![Message {
-        time: t0,
-        bag: GrandTourBag::TfMinimal,
-        topic: "/tf_static",
-        type_name: "tf2_msgs/TFMessage",
-        data: ros1::encode_tf_message(
-            0,
-            &TFMessage {
-                transforms: vec![
-                    transform(t0, "base", "hesai_lidar", &iso(lever_of("dlio"))),
-                    transform(t0, "base", "prism", &iso(Vector3::zeros())),
-                    transform(t0, "base", "cpt7_imu", &iso(lever_of("ins"))),
-                ],
-            },
-        ),
-    }];
+    let mut all = vec![multi_clock_static_tf(mission)];
     for (i, (&t, p)) in mission
         .reference
         .stamps_ns
@@ -514,49 +491,7 @@ pub fn write_multi_clock(
         });
     }
     for (spec, traj) in c.sources.iter().zip(&mission.sources) {
-        let topic: &'static str = match spec.name.as_str() {
-            "ins" => INS_TOPIC,
-            "dlio" => DLIO_TOPIC,
-            "state_estimator" => STATE_ESTIMATOR_TOPIC,
-            _ => OPEN3D_SLAM_TOPIC,
-        };
-        let bag = multi_clock_bag(&spec.name);
-        let (frame, child) = multi_clock_frames(&spec.name);
-        let lever = iso(Vector3::from(spec.lever_m));
-        let orientations = traj.orientations.as_deref().unwrap_or(&[]);
-        for (i, (&t, p)) in traj.stamps_ns.iter().zip(&traj.positions).enumerate() {
-            let q = orientations
-                .get(i)
-                .copied()
-                .unwrap_or_else(UnitQuaternion::identity);
-            let pose = Isometry3::from_parts(Translation3::from(*p), q);
-            all.push(Message {
-                time: t,
-                bag,
-                topic,
-                type_name: "nav_msgs/Odometry",
-                data: odometry(i as u32, t, frame, child, &pose),
-            });
-            if spec.name == "dlio" {
-                all.push(Message {
-                    time: t,
-                    bag,
-                    topic: "/tf",
-                    type_name: "tf2_msgs/TFMessage",
-                    data: ros1::encode_tf_message(
-                        i as u32,
-                        &TFMessage {
-                            transforms: vec![transform(
-                                t,
-                                "dlio_map",
-                                "base",
-                                &(pose * lever.inverse()),
-                            )],
-                        },
-                    ),
-                });
-            }
-        }
+        source_messages(spec, traj, &mut all);
     }
     all.sort_by_key(|m| m.time);
     let span = (t0, mission.duration_s);
@@ -575,4 +510,87 @@ pub fn write_multi_clock(
     }
     written.sort();
     Ok(written)
+}
+
+fn iso(v: Vector3<f64>) -> Isometry3<f64> {
+    Isometry3::from_parts(Translation3::from(v), UnitQuaternion::identity())
+}
+
+/// `/tf_static`: the lidar's, the prism's and the INS's place on the body.
+fn multi_clock_static_tf(mission: &crate::simulate::sources::MultiClockMission) -> Message {
+    let c = &mission.config;
+    let t0 = c.start_time_ns;
+    let lever_of = |name: &str| {
+        c.sources
+            .iter()
+            .find(|s| s.name == name)
+            .map_or(Vector3::zeros(), |s| Vector3::from(s.lever_m))
+    };
+    Message {
+        time: t0,
+        bag: GrandTourBag::TfMinimal,
+        topic: "/tf_static",
+        type_name: "tf2_msgs/TFMessage",
+        data: ros1::encode_tf_message(
+            0,
+            &TFMessage {
+                transforms: vec![
+                    transform(t0, "base", "hesai_lidar", &iso(lever_of("dlio"))),
+                    transform(t0, "base", "prism", &iso(Vector3::zeros())),
+                    transform(t0, "base", "cpt7_imu", &iso(lever_of("ins"))),
+                ],
+            },
+        ),
+    }
+}
+
+/// One source's odometry messages (and DLIO's TF), on its own clock.
+fn source_messages(
+    spec: &crate::simulate::sources::SourceSpec,
+    traj: &crate::trajectory::Trajectory,
+    all: &mut Vec<Message>,
+) {
+    let topic: &'static str = match spec.name.as_str() {
+        "ins" => INS_TOPIC,
+        "dlio" => DLIO_TOPIC,
+        "state_estimator" => STATE_ESTIMATOR_TOPIC,
+        _ => OPEN3D_SLAM_TOPIC,
+    };
+    let bag = multi_clock_bag(&spec.name);
+    let (frame, child) = multi_clock_frames(&spec.name);
+    let lever = iso(Vector3::from(spec.lever_m));
+    let orientations = traj.orientations.as_deref().unwrap_or(&[]);
+    for (i, (&t, p)) in traj.stamps_ns.iter().zip(&traj.positions).enumerate() {
+        let q = orientations
+            .get(i)
+            .copied()
+            .unwrap_or_else(UnitQuaternion::identity);
+        let pose = Isometry3::from_parts(Translation3::from(*p), q);
+        all.push(Message {
+            time: t,
+            bag,
+            topic,
+            type_name: "nav_msgs/Odometry",
+            data: odometry(i as u32, t, frame, child, &pose),
+        });
+        if spec.name == "dlio" {
+            all.push(Message {
+                time: t,
+                bag,
+                topic: "/tf",
+                type_name: "tf2_msgs/TFMessage",
+                data: ros1::encode_tf_message(
+                    i as u32,
+                    &TFMessage {
+                        transforms: vec![transform(
+                            t,
+                            "dlio_map",
+                            "base",
+                            &(pose * lever.inverse()),
+                        )],
+                    },
+                ),
+            });
+        }
+    }
 }

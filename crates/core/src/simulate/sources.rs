@@ -126,6 +126,115 @@ impl MultiClockConfig {
     /// each with its own lever (up to 0.5 m, some vertical), rate and noise. `duration_s` sets where
     /// the step falls.
     pub fn varied(seed: u64, duration_s: f64) -> MultiClockConfig {
+        let d = Draws::new(seed, duration_s);
+        MultiClockConfig {
+            seed,
+            start_time_ns: 1_718_460_000_000_000_000,
+            ref_rate_hz: 10.0,
+            ref_noise_m: 0.02,
+            sources: vec![
+                spec(
+                    "ins",
+                    super::grandtour::INS_TOPIC,
+                    50.0,
+                    0.005,
+                    d.ins_lever,
+                    0.0,
+                    SourceFrame::World,
+                    SourceClock::SHARED,
+                ),
+                spec(
+                    "dlio",
+                    super::grandtour::DLIO_TOPIC,
+                    10.0,
+                    0.005,
+                    d.dlio_lever,
+                    d.dlio_scale,
+                    SourceFrame::Odometry,
+                    SourceClock {
+                        offset_s: d.dlio_offset,
+                        ..SourceClock::SHARED
+                    },
+                ),
+                spec(
+                    "state_estimator",
+                    super::grandtour::STATE_ESTIMATOR_TOPIC,
+                    50.0,
+                    0.003,
+                    d.se_lever,
+                    d.se_scale,
+                    SourceFrame::Odometry,
+                    SourceClock {
+                        offset_s: d.se_offset,
+                        drift_ppm: d.drift,
+                        step: None,
+                    },
+                ),
+                spec(
+                    "open3d_slam",
+                    super::grandtour::OPEN3D_SLAM_TOPIC,
+                    10.0,
+                    0.005,
+                    d.o3d_lever,
+                    d.o3d_scale,
+                    SourceFrame::Odometry,
+                    SourceClock {
+                        offset_s: d.o3d_offset,
+                        drift_ppm: 0.0,
+                        step: Some(ClockStep {
+                            at_s: d.at_s,
+                            offset_s: d.o3d_offset + d.step,
+                        }),
+                    },
+                ),
+            ],
+        }
+    }
+}
+
+/// A source's description (a function, so that [`MultiClockConfig::varied`] reads as a table).
+#[allow(clippy::too_many_arguments)]
+fn spec(
+    name: &str,
+    topic: &str,
+    rate_hz: f64,
+    noise_m: f64,
+    lever_m: [f64; 3],
+    scale_error: f64,
+    frame: SourceFrame,
+    clock: SourceClock,
+) -> SourceSpec {
+    SourceSpec {
+        name: name.into(),
+        topic: topic.into(),
+        rate_hz,
+        noise_m,
+        lever_m,
+        scale_error,
+        frame,
+        clock,
+    }
+}
+
+/// What [`MultiClockConfig::varied`] draws from its seed, in the order drawn.
+struct Draws {
+    dlio_offset: f64,
+    se_offset: f64,
+    drift: f64,
+    o3d_offset: f64,
+    step: f64,
+    at_s: f64,
+    ins_lever: [f64; 3],
+    dlio_lever: [f64; 3],
+    se_lever: [f64; 3],
+    o3d_lever: [f64; 3],
+    dlio_scale: f64,
+    se_scale: f64,
+    o3d_scale: f64,
+}
+
+impl Draws {
+    fn new(seed: u64, duration_s: f64) -> Draws {
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x6d75_6c74_6963_6c6b);
         let sign = |rng: &mut ChaCha8Rng| if rng.random_bool(0.5) { 1.0 } else { -1.0 };
         let lever = |rng: &mut ChaCha8Rng, max: f64| -> [f64; 3] {
@@ -149,23 +258,6 @@ impl MultiClockConfig {
         let s5 = sign(&mut rng);
         let step = s5 * (rng.random_range(0.2..0.6) * 1000.0_f64).round() / 1000.0;
         let at_s = (rng.random_range(0.35..0.65) * duration_s).round();
-        let source = |name: &str,
-                      topic: &str,
-                      rate_hz: f64,
-                      noise_m: f64,
-                      lever_m: [f64; 3],
-                      scale_error: f64,
-                      frame: SourceFrame,
-                      clock: SourceClock| SourceSpec {
-            name: name.into(),
-            topic: topic.into(),
-            rate_hz,
-            noise_m,
-            lever_m,
-            scale_error,
-            frame,
-            clock,
-        };
         let ins_lever = lever(&mut rng, 0.3);
         let dlio_lever = lever(&mut rng, 0.5);
         let se_lever = lever(&mut rng, 0.3);
@@ -173,67 +265,20 @@ impl MultiClockConfig {
         let scale =
             |rng: &mut ChaCha8Rng| (rng.random_range(-0.02..0.02) * 1000.0_f64).round() / 1000.0;
         let (dlio_scale, se_scale, o3d_scale) = (scale(&mut rng), scale(&mut rng), scale(&mut rng));
-        MultiClockConfig {
-            seed,
-            start_time_ns: 1_718_460_000_000_000_000,
-            ref_rate_hz: 10.0,
-            ref_noise_m: 0.02,
-            sources: vec![
-                source(
-                    "ins",
-                    super::grandtour::INS_TOPIC,
-                    50.0,
-                    0.005,
-                    ins_lever,
-                    0.0,
-                    SourceFrame::World,
-                    SourceClock::SHARED,
-                ),
-                source(
-                    "dlio",
-                    super::grandtour::DLIO_TOPIC,
-                    10.0,
-                    0.005,
-                    dlio_lever,
-                    dlio_scale,
-                    SourceFrame::Odometry,
-                    SourceClock {
-                        offset_s: dlio_offset,
-                        ..SourceClock::SHARED
-                    },
-                ),
-                source(
-                    "state_estimator",
-                    super::grandtour::STATE_ESTIMATOR_TOPIC,
-                    50.0,
-                    0.003,
-                    se_lever,
-                    se_scale,
-                    SourceFrame::Odometry,
-                    SourceClock {
-                        offset_s: se_offset,
-                        drift_ppm: drift,
-                        step: None,
-                    },
-                ),
-                source(
-                    "open3d_slam",
-                    super::grandtour::OPEN3D_SLAM_TOPIC,
-                    10.0,
-                    0.005,
-                    o3d_lever,
-                    o3d_scale,
-                    SourceFrame::Odometry,
-                    SourceClock {
-                        offset_s: o3d_offset,
-                        drift_ppm: 0.0,
-                        step: Some(ClockStep {
-                            at_s,
-                            offset_s: o3d_offset + step,
-                        }),
-                    },
-                ),
-            ],
+        Draws {
+            dlio_offset,
+            se_offset,
+            drift,
+            o3d_offset,
+            step,
+            at_s,
+            ins_lever,
+            dlio_lever,
+            se_lever,
+            o3d_lever,
+            dlio_scale,
+            se_scale,
+            o3d_scale,
         }
     }
 }
