@@ -87,18 +87,15 @@ pub fn copy_recording<W: Write + Seek, A: Annotations<W>>(
                 log_time: m.log_time,
                 publish_time: m.publish_time,
             };
-            annotations.before_message(&mut w, channel, &header, m.data)?;
-            let log_time = match annotations.rewrite(part, channel, &header, m.data)? {
-                Some((h, d)) => {
-                    w.write_to_known_channel(&h, &d).map_err(write_err)?;
-                    h.log_time
-                }
-                None => {
-                    w.write_to_known_channel(&header, m.data)
-                        .map_err(write_err)?;
-                    m.log_time
-                }
-            };
+            let log_time = super::copy::write_message(
+                &mut w,
+                annotations,
+                part,
+                channel,
+                &header,
+                m.data,
+                output_path,
+            )?;
             outcome.messages += 1;
             outcome.last_log_time = outcome.last_log_time.max(log_time);
             Ok(())

@@ -34,6 +34,34 @@ pub struct InputChannel {
 /// A message as the copy writes it, when [`Annotations::rewrite`] changes it.
 pub type Rewritten = (MessageHeader, Vec<u8>);
 
+/// Writes one input message to the copy — as [`Annotations::rewrite`] changes it, or unchanged —
+/// after [`Annotations::before_message`]; returns its log time as written.
+pub fn write_message<W: Write + Seek, A: Annotations<W>>(
+    w: &mut Writer<W>,
+    annotations: &mut A,
+    part: usize,
+    channel: &InputChannel,
+    header: &MessageHeader,
+    data: &[u8],
+    output_path: &Path,
+) -> Result<u64> {
+    let write_err = |e: McapError| Error::Output {
+        path: output_path.to_path_buf(),
+        detail: e.to_string(),
+    };
+    annotations.before_message(w, channel, header, data)?;
+    match annotations.rewrite(part, channel, header, data)? {
+        Some((h, d)) => {
+            w.write_to_known_channel(&h, &d).map_err(write_err)?;
+            Ok(h.log_time)
+        }
+        None => {
+            w.write_to_known_channel(header, data).map_err(write_err)?;
+            Ok(header.log_time)
+        }
+    }
+}
+
 /// Adds records to the copy. Each hook gets the writer; ids it uses must not clash with the input's.
 pub trait Annotations<W: Write + Seek> {
     /// Called once, after the input's header, before any other record.
@@ -205,20 +233,10 @@ pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
                         header.channel_id
                     ))
                 })?;
-                annotations.before_message(w, channel, &header, &data)?;
-                let header = match annotations.rewrite(0, channel, &header, &data)? {
-                    Some((h, d)) => {
-                        w.write_to_known_channel(&h, &d).map_err(write_err)?;
-                        h
-                    }
-                    None => {
-                        w.write_to_known_channel(&header, &data)
-                            .map_err(write_err)?;
-                        header
-                    }
-                };
+                let log_time =
+                    write_message(w, annotations, 0, channel, &header, &data, output_path)?;
                 outcome.messages += 1;
-                outcome.last_log_time = outcome.last_log_time.max(header.log_time);
+                outcome.last_log_time = outcome.last_log_time.max(log_time);
             }
             Record::Attachment { header, data, .. } => {
                 w.attach(&mcap::Attachment {

@@ -52,7 +52,6 @@ fn simulate(dir: &Path, seed: u64, duration_s: u32) -> (PathBuf, Value) {
         &duration_s.to_string(),
         "--truth",
         truth.to_str().unwrap(),
-        "--quiet",
     ]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     (
@@ -398,7 +397,7 @@ fn independent_mission_one_file_and_per_source_folder() {
 fn a_source_given_a_wrong_clock_is_named_by_the_closure() {
     let dir = tempfile::tempdir().unwrap();
     let mut judged = 0;
-    for seed in [1, 4, 5] {
+    for seed in 1..=5 {
         let (mission, _) = simulate(dir.path(), seed, 1200);
         let (_, a) = audit(&[&mission], &dir.path().join(format!("w{seed}.json")), &[]);
         let report: AuditReport = serde_json::from_value(a).unwrap();
@@ -427,11 +426,18 @@ fn a_source_given_a_wrong_clock_is_named_by_the_closure() {
             assert_eq!(named, [wrong.as_str()], "seed {seed}: {:?}", r.closure);
             judged += 1;
         }
-        // Untouched, it judges the same.
+        // Untouched, it judges the same (the spans read back from the JSON's coverage, on the reference
+        // clock, move the pieces' middles a little: a drifting pair's residual by tens of µs).
         let mut same = report.clone();
         rejudge(&mut same);
-        assert_eq!(same.closure, report.closure);
-        assert_eq!(same.domains, report.domains);
+        for (x, y) in same.closure.iter().zip(&report.closure) {
+            assert_eq!((&x.sources, x.consistent), (&y.sources, y.consistent));
+            assert!((x.residual_s - y.residual_s).abs() < 1e-4, "{x:?} {y:?}");
+        }
+        let groups = |r: &AuditReport| -> Vec<Vec<String>> {
+            r.domains.iter().map(|d| d.sources.clone()).collect()
+        };
+        assert_eq!(groups(&same), groups(&report));
     }
     assert!(judged > 0, "no seed closed as measured");
 }
@@ -483,13 +489,15 @@ fn restamp_moves_each_domain_and_copies_the_rest() {
         .collect();
     assert_eq!(before.messages.len(), after.messages.len());
     let mut shifted = 0;
+    let mut landed: BTreeMap<String, Option<i64>> = BTreeMap::new();
     for (b, a) in before.messages.iter().zip(&after.messages) {
         let topic = &before.topics[&b.0];
         assert_eq!(topic, &after.topics[&a.0]);
         match moved.get(topic) {
             None => assert_eq!(b, a, "{topic}: copied unchanged"),
             Some(c) => {
-                let want = c.stamp(stamp(&b.3)).unwrap();
+                let last = landed.entry(topic.clone()).or_default();
+                let want = c.stamp_in_stream(stamp(&b.3), last).unwrap();
                 assert_eq!(stamp(&a.3), want, "{topic}: header stamp");
                 assert_eq!(
                     a.1 as i64 - b.1 as i64,
@@ -508,6 +516,11 @@ fn restamp_moves_each_domain_and_copies_the_rest() {
     }
     assert!(shifted > 0 && moved.len() == 3, "{moved:?}");
     let (_, again) = audit(&[&fixed], &dir.path().join("again.json"), &[]);
+    assert_at_zero(&again);
+}
+
+/// Every source of an audit of a restamped copy constant at 0 ± 2 ms, the stepping one left out.
+fn assert_at_zero(again: &Value) {
     for s in again["sources"].as_array().unwrap().iter().skip(1) {
         let name = s["name"].as_str().unwrap();
         if name.starts_with("vio") {
