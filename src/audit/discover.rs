@@ -193,7 +193,7 @@ fn pick_reference(
     readable: &[&TopicInfo],
     notes: &mut Vec<String>,
 ) -> Result<NamedInput> {
-    fn by_count<'a>(pool: Vec<&'a TopicInfo>) -> Option<&'a TopicInfo> {
+    fn by_count(pool: Vec<&TopicInfo>) -> Option<&TopicInfo> {
         pool.into_iter()
             .max_by_key(|t| (t.message_count, std::cmp::Reverse(t.topic.clone())))
     }
