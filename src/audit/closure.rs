@@ -166,7 +166,7 @@ mod tests {
             t_mid: None,
             segments: Vec::new(),
             status: TimeOffsetStatus::Ok,
-            method: "speed".into(),
+            method: crate::audit::report::ClockMethod::Speed,
             profile: Vec::new(),
         }
     }

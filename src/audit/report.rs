@@ -12,7 +12,8 @@ use crate::align::clock_model::OffsetModel;
 use crate::clock::ClockCorrection;
 use crate::diag::Warning;
 use crate::report::json::{
-    OffsetProfilePoint, OffsetSegmentReport, Report, TimeOffsetReport, TimeOffsetStatus, Tool,
+    OffsetProfilePoint, OffsetSegmentReport, OffsetSource, Report, TimeOffsetReport,
+    TimeOffsetStatus, Tool,
 };
 use crate::sources::StampSource;
 
@@ -125,9 +126,9 @@ pub struct Clock {
     pub segments: Vec<OffsetSegmentReport>,
     /// `ok`, `weak` (nothing applied, `offset_s` is the weak peak) or `given`.
     pub status: TimeOffsetStatus,
-    /// The method applied (`speed`, `signed-curvature`, …).
+    /// The method applied (`speed`, `signed-curvature`, …), or `reference` for the reference's own.
     #[serde(default)]
-    pub method: String,
+    pub method: ClockMethod,
     /// The offset measured on sliding windows (for the figures).
     #[serde(default)]
     pub profile: Vec<OffsetProfilePoint>,
@@ -150,7 +151,7 @@ impl Clock {
                 sigma_s: 0.0,
             }],
             status: TimeOffsetStatus::Given,
-            method: "reference".into(),
+            method: ClockMethod::Reference,
             profile: Vec::new(),
         }
     }
@@ -177,7 +178,7 @@ impl Clock {
             t_mid: o.t_mid,
             segments,
             status: o.status,
-            method: o.method.as_str().to_string(),
+            method: o.method.into(),
             profile: o.profile.clone(),
         }
     }
@@ -253,6 +254,32 @@ impl Clock {
             return Vec::new();
         }
         self.segments.iter().skip(1).map(|s| s.t_start).collect()
+    }
+}
+
+/// Where a clock came from: the reference's own, or an evaluation's offset method (its
+/// [`OffsetSource`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ClockMethod {
+    Reference,
+    Given,
+    #[default]
+    Auto,
+    Speed,
+    SignedCurvature,
+    Curvature,
+}
+
+impl From<OffsetSource> for ClockMethod {
+    fn from(s: OffsetSource) -> Self {
+        match s {
+            OffsetSource::Given => ClockMethod::Given,
+            OffsetSource::Auto => ClockMethod::Auto,
+            OffsetSource::Speed => ClockMethod::Speed,
+            OffsetSource::SignedCurvature => ClockMethod::SignedCurvature,
+            OffsetSource::Curvature => ClockMethod::Curvature,
+        }
     }
 }
 

@@ -3,7 +3,7 @@
 
 use std::fmt::Write;
 
-use super::report::{AuditReport, Clock, SourceAudit};
+use super::report::{AuditReport, Clock, ClockMethod, SourceAudit};
 use crate::align::clock_model::OffsetModel;
 use crate::report::escape::escape;
 use crate::report::json::TimeOffsetStatus;
@@ -15,7 +15,7 @@ pub fn describe_clock(c: &Clock, t0: f64) -> String {
         .map_or(String::new(), |s| format!(" ± {:.1} ms", s * 1e3));
     match (c.status, c.model) {
         (TimeOffsetStatus::Weak, _) => format!("weak (best {:+.4} s)", c.offset_s),
-        (TimeOffsetStatus::Given, _) if c.method == "reference" => "reference".into(),
+        (TimeOffsetStatus::Given, _) if c.method == ClockMethod::Reference => "reference".into(),
         (_, OffsetModel::Constant) => format!("constant {:+.4} s{sigma}", c.offset_s),
         (_, OffsetModel::Linear) => format!(
             "linear {:+.4} s{sigma} at {:.0} s, {:+.1} ppm",
