@@ -32,6 +32,7 @@ extern crate self as trajdrift;
 
 pub mod annotate;
 pub mod api;
+pub mod audit;
 pub mod batch;
 pub mod cli;
 pub mod eval;

@@ -33,10 +33,22 @@ pub fn profile(channels: &[ChannelInfo]) -> &'static str {
     }
 }
 
-/// Copies every message of `rec` (none when `None`) into a new MCAP on `out`, calling `annotations`
-/// along the way. Returns the sink (to flush and sync).
+/// What [`copy_recording`] copies.
+#[derive(Clone, Copy)]
+pub enum CopyInput<'a> {
+    /// No recording (text trajectories): the annotations alone.
+    Nothing,
+    /// One recording (a mission read as one is one too: its files are not told apart).
+    One(&'a dyn Recording),
+    /// A mission whose files are told apart: each message's file index goes to
+    /// [`Annotations::rewrite`].
+    Parts(&'a crate::sources::mission::Mission),
+}
+
+/// Copies every message of `input` into a new MCAP on `out`, calling `annotations` along the way.
+/// Returns the sink (to flush and sync).
 pub fn copy_recording<W: Write + Seek, A: Annotations<W>>(
-    rec: Option<&dyn Recording>,
+    input: CopyInput<'_>,
     out: W,
     output_path: &Path,
     options: mcap::WriteOptions,
@@ -51,30 +63,19 @@ pub fn copy_recording<W: Write + Seek, A: Annotations<W>>(
     let mut w: Writer<W> = options.profile(profile).create(out).map_err(write_err)?;
     annotations.start(&mut w)?;
     let mut outcome = CopyOutcome::default();
-    if let Some(rec) = rec {
+    if !matches!(input, CopyInput::Nothing) {
         // (name, encoding, text) → schema id, counting up from 1 (the annotations count down).
         let mut schemas: HashMap<(String, String, Vec<u8>), u16> = HashMap::new();
         let mut channels: HashMap<u16, InputChannel> = HashMap::new();
         let mut sequences: HashMap<u16, u32> = HashMap::new();
-        let o = rec.pass(&mut |_| true, progress, &mut |c, m| {
+        let mut on_message = |part: usize,
+                              c: &ChannelInfo,
+                              m: &crate::sources::recording::MessageRef<'_>|
+         -> Result<()> {
             let channel = match channels.entry(c.id) {
                 Entry::Occupied(e) => e.into_mut(),
                 Entry::Vacant(e) => {
-                    let schema_id = schema_for(&mut w, &mut schemas, c).map_err(write_err)?;
-                    w.add_channel_with_id(
-                        c.id,
-                        schema_id,
-                        &c.topic,
-                        &c.message_encoding,
-                        &BTreeMap::new(),
-                    )
-                    .map_err(write_err)?;
-                    e.insert(InputChannel {
-                        id: c.id,
-                        schema_id,
-                        topic: c.topic.clone(),
-                        message_encoding: c.message_encoding.clone(),
-                    })
+                    e.insert(add_channel(&mut w, &mut schemas, c).map_err(write_err)?)
                 }
             };
             // Formats without sequence numbers (ROS 1 bags, rosbag2) get them counted per channel.
@@ -86,18 +87,57 @@ pub fn copy_recording<W: Write + Seek, A: Annotations<W>>(
                 log_time: m.log_time,
                 publish_time: m.publish_time,
             };
-            annotations.before_message(&mut w, channel, &header, m.data)?;
-            w.write_to_known_channel(&header, m.data)
-                .map_err(write_err)?;
+            let log_time = super::copy::write_message(
+                &mut w,
+                annotations,
+                part,
+                channel,
+                &header,
+                m.data,
+                output_path,
+            )?;
             outcome.messages += 1;
-            outcome.last_log_time = outcome.last_log_time.max(m.log_time);
+            outcome.last_log_time = outcome.last_log_time.max(log_time);
             Ok(())
-        })?;
-        outcome.truncated_at = o.truncated_at;
+        };
+        let o = match input {
+            CopyInput::One(rec) => {
+                Some(rec.pass(&mut |_| true, progress, &mut |c, m| on_message(0, c, m))?)
+            }
+            CopyInput::Parts(mission) => {
+                Some(mission.pass_parts(&mut |_| true, progress, &mut on_message)?)
+            }
+            CopyInput::Nothing => None,
+        };
+        outcome.truncated_at = o.and_then(|o| o.truncated_at);
     }
     annotations.finish(&mut w)?;
     w.finish().map_err(write_err)?;
     Ok((outcome, w.into_inner()))
+}
+
+/// Writes channel `c` (its schema at its first use) to the copy, with its input id.
+fn add_channel<W: Write + Seek>(
+    w: &mut Writer<W>,
+    schemas: &mut HashMap<(String, String, Vec<u8>), u16>,
+    c: &ChannelInfo,
+) -> std::result::Result<InputChannel, McapError> {
+    let schema_id = schema_for(w, schemas, c)?;
+    w.add_channel_with_id(
+        c.id,
+        schema_id,
+        &c.topic,
+        &c.message_encoding,
+        &BTreeMap::new(),
+    )?;
+    Ok(InputChannel {
+        id: c.id,
+        schema_id,
+        topic: c.topic.clone(),
+        message_encoding: c.message_encoding.clone(),
+        schema_name: c.schema_name.clone(),
+        schema_data: c.schema_data.clone(),
+    })
 }
 
 /// The schema id of `c`'s schema, written at its first use; 0 (none) for a schemaless channel.

@@ -25,6 +25,41 @@ pub struct InputChannel {
     pub schema_id: u16,
     pub topic: String,
     pub message_encoding: String,
+    /// The schema's name and text (empty for a schemaless channel): what tells whether its messages
+    /// start with a `std_msgs/Header`.
+    pub schema_name: String,
+    pub schema_data: std::sync::Arc<[u8]>,
+}
+
+/// A message as the copy writes it, when [`Annotations::rewrite`] changes it.
+pub type Rewritten = (MessageHeader, Vec<u8>);
+
+/// Writes one input message to the copy — as [`Annotations::rewrite`] changes it, or unchanged —
+/// after [`Annotations::before_message`]; returns its log time as written.
+pub fn write_message<W: Write + Seek, A: Annotations<W>>(
+    w: &mut Writer<W>,
+    annotations: &mut A,
+    part: usize,
+    channel: &InputChannel,
+    header: &MessageHeader,
+    data: &[u8],
+    output_path: &Path,
+) -> Result<u64> {
+    let write_err = |e: McapError| Error::Output {
+        path: output_path.to_path_buf(),
+        detail: e.to_string(),
+    };
+    annotations.before_message(w, channel, header, data)?;
+    match annotations.rewrite(part, channel, header, data)? {
+        Some((h, d)) => {
+            w.write_to_known_channel(&h, &d).map_err(write_err)?;
+            Ok(h.log_time)
+        }
+        None => {
+            w.write_to_known_channel(header, data).map_err(write_err)?;
+            Ok(header.log_time)
+        }
+    }
 }
 
 /// Adds records to the copy. Each hook gets the writer; ids it uses must not clash with the input's.
@@ -39,6 +74,19 @@ pub trait Annotations<W: Write + Seek> {
         header: &MessageHeader,
         data: &[u8],
     ) -> Result<()>;
+    /// The message to write in place of the input's (its times and bytes changed): `None`, the
+    /// default, copies it unchanged. `part` is the index of the file it came from within a mission
+    /// ([`crate::sources::mission::Mission::parts`]; 0 for a single recording).
+    fn rewrite(
+        &mut self,
+        part: usize,
+        channel: &InputChannel,
+        header: &MessageHeader,
+        data: &[u8],
+    ) -> Result<Option<Rewritten>> {
+        let _ = (part, channel, header, data);
+        Ok(None)
+    }
     /// Called once after the last input record; the writer is finished by the caller.
     fn finish(&mut self, writer: &mut Writer<W>) -> Result<()>;
 }
@@ -82,6 +130,7 @@ pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
     let mut out = Some(out);
     let mut writer: Option<Writer<W>> = None;
     let mut channels: HashMap<u16, InputChannel> = HashMap::new();
+    let mut schemas: HashMap<u16, (String, std::sync::Arc<[u8]>)> = HashMap::new();
     let mut outcome = CopyOutcome::default();
     let mut bytes_read = magic.len() as u64;
     let mut last_progress = 0;
@@ -151,6 +200,9 @@ pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
             Record::Schema { header, data } => {
                 w.add_schema_with_id(header.id, &header.name, &header.encoding, &data)
                     .map_err(write_err)?;
+                schemas
+                    .entry(header.id)
+                    .or_insert_with(|| (header.name.clone(), data.to_vec().into()));
             }
             Record::Channel(c) => {
                 w.add_channel_with_id(
@@ -161,11 +213,17 @@ pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
                     &c.metadata,
                 )
                 .map_err(write_err)?;
+                let (schema_name, schema_data) = schemas
+                    .get(&c.schema_id)
+                    .cloned()
+                    .unwrap_or_else(|| (String::new(), std::sync::Arc::from(&[][..])));
                 channels.entry(c.id).or_insert(InputChannel {
                     id: c.id,
                     schema_id: c.schema_id,
                     topic: c.topic,
                     message_encoding: c.message_encoding,
+                    schema_name,
+                    schema_data,
                 });
             }
             Record::Message { header, data } => {
@@ -175,11 +233,10 @@ pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
                         header.channel_id
                     ))
                 })?;
-                annotations.before_message(w, channel, &header, &data)?;
-                w.write_to_known_channel(&header, &data)
-                    .map_err(write_err)?;
+                let log_time =
+                    write_message(w, annotations, 0, channel, &header, &data, output_path)?;
                 outcome.messages += 1;
-                outcome.last_log_time = outcome.last_log_time.max(header.log_time);
+                outcome.last_log_time = outcome.last_log_time.max(log_time);
             }
             Record::Attachment { header, data, .. } => {
                 w.attach(&mcap::Attachment {

@@ -11,6 +11,7 @@ pub mod channels;
 pub mod copy;
 pub mod input_info;
 pub mod metadata;
+pub mod stamps;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -190,7 +191,9 @@ pub fn annotate(
         None => any_input::copy_recording(
             recording
                 .as_deref()
-                .map(|r| r as &dyn crate::sources::recording::Recording),
+                .map_or(any_input::CopyInput::Nothing, |r| {
+                    any_input::CopyInput::One(r as &dyn crate::sources::recording::Recording)
+                }),
             file,
             out,
             options,

@@ -4,6 +4,7 @@
 //!
 //! [`discover`] finds the missions of a folder, [`manifest`] reads what to run, [`run`] runs it, [`summary`] aggregates, [`shard`] splits.
 
+pub mod audit;
 pub mod discover;
 pub mod identity;
 pub mod manifest;

@@ -30,6 +30,14 @@ pub enum Command {
     /// List a recording's channels, their types and counts, and which trajdrift can read.
     #[command(after_help = help::TOPICS)]
     Topics(TopicsArgs),
+    /// The clock map of a whole mission: each source's clock, lever arm, rate, gaps, coverage, Drift
+    /// Error and APE; every pair's offset, the closure of every triple, the clock domains.
+    #[command(after_help = help::AUDIT)]
+    Audit(Box<AuditArgs>),
+    /// A copy of a mission (one MCAP) with each clock domain's stamps and times moved onto the
+    /// reference's clock, every other message unchanged, the audit attached.
+    #[command(after_help = help::RESTAMP)]
+    Restamp(Box<RestampArgs>),
     /// Write a simulated mission (ROS 2 MCAP) with known truth.
     #[command(after_help = help::SIMULATE)]
     Simulate(SimulateArgs),
@@ -98,6 +106,26 @@ Examples:
   # Two text trajectories, the estimate named, the clock offset known (no search)
   trajdrift eval --reference-file gt.tum --estimate-file lio=lio.tum --time-offset -0.35";
 
+    pub const AUDIT: &str = "\
+Examples:
+  # A GrandTour-like mission folder of per-sensor bags: every pose topic is a source
+  trajdrift audit clocks/ --json audit.json --html audit.html
+  # A mission of per-source MCAP files, the sources named, a TF chain among them
+  trajdrift audit mission/ --reference /reference/position --source ins=/ins/odom --source lio=/lio/odom \\
+      --source /tf:odom:base_link
+  trajdrift audit mission.mcap --preset grandtour-prism -q --json -     # the JSON on stdout
+
+Exit status: 3 when a clock is not constant, a triple does not close or an offset is weak.";
+
+    pub const RESTAMP: &str = "\
+Examples:
+  # Audit and fix in one go: each file's messages moved by its clock (GrandTour's per-sensor bags)
+  trajdrift restamp clocks/ --out fixed.mcap
+  # From an audit already made, one computer's topics moved together
+  trajdrift restamp mission.mcap --audit audit.json --out fixed.mcap \\
+      --domain nuc=/lio/odom,/lio/points,/imu/data
+  trajdrift audit fixed.mcap          # every domain now at 0 and constant";
+
     pub const TOPICS: &str = "\
 Examples:
   trajdrift topics fixtures/sim_ground/mission.mcap
@@ -107,7 +135,9 @@ Examples:
 Examples:
   trajdrift simulate sim.mcap --truth truth.json --time-offset 0.35 --scale-error 0.01
   trajdrift simulate long.mcap --duration 7200 --est-rate 200 --clock-drift-ppm 50
-  trajdrift simulate grandtour/ --grandtour           # per-sensor ROS 1 bags, GrandTour's topics";
+  trajdrift simulate grandtour/ --grandtour           # per-sensor ROS 1 bags, GrandTour's topics
+  # Five sources on four clocks (shared, offset, drifting, stepping), for `trajdrift audit`
+  trajdrift simulate clocks/ --grandtour --multi-clock --duration 1200 --seed 3 --truth clocks.json";
 
     pub const BATCH: &str = "\
 Examples:
@@ -314,6 +344,75 @@ pub struct TextArgs {
     pub kitti_times: Option<PathBuf>,
 }
 
+/// Which sources an audit takes (shared by `audit` and `restamp`).
+#[derive(Debug, Args)]
+pub struct SourceArgs {
+    /// The reference topic (default: the preset's, or the position-only topic with the most
+    /// messages).
+    #[arg(long, value_name = "TOPIC")]
+    pub reference: Option<String>,
+    /// A source, optionally named (repeatable; TF chains /tf:PARENT:CHILD work). Default: every
+    /// readable pose or position topic, and the preset's estimates.
+    #[arg(long, value_name = "[NAME=]TOPIC")]
+    pub source: Vec<String>,
+    /// The usual topics of a dataset: a built-in preset (grandtour, grandtour-prism, fomo) or a preset
+    /// file; its reference is the audit's.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub preset: Option<String>,
+}
+
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct AuditArgs {
+    /// The recording (MCAP, ROS 1 bag, rosbag2 folder), several files of one mission, or a mission
+    /// folder (each file read once, all sources in one pass).
+    #[arg(required = true, num_args = 1..)]
+    pub recording: Vec<PathBuf>,
+    #[command(flatten)]
+    pub sources: SourceArgs,
+    /// Write the audit as JSON to FILE (`-` = stdout; schemas/audit.schema.json).
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Write a self-contained HTML page (offset matrix, clocks by domain, closure, profiles) to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub html: Option<PathBuf>,
+    /// Print nothing but errors and warnings.
+    #[arg(long, short)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub params: ParameterFlags,
+}
+
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct RestampArgs {
+    /// The recording (MCAP, ROS 1 bag, rosbag2 folder), several files of one mission, or a mission
+    /// folder; never modified.
+    #[arg(required = true, num_args = 1..)]
+    pub recording: Vec<PathBuf>,
+    /// The output: one MCAP holding every message of the input.
+    #[arg(long, value_name = "FIXED.mcap")]
+    pub out: PathBuf,
+    /// An audit of the same recording (`trajdrift audit --json`); without it the audit is run first.
+    #[arg(long, value_name = "AUDIT.json")]
+    pub audit: Option<PathBuf>,
+    /// A clock domain: topics recorded on one clock, moved together by the clock of the audited
+    /// sources among them (repeatable). Default: each source's file (a mission of several files), or
+    /// its topic alone.
+    #[arg(long, value_name = "NAME=TOPIC,...")]
+    pub domain: Vec<String>,
+    /// Replace an existing output.
+    #[arg(long)]
+    pub force: bool,
+    /// Print nothing but errors and warnings.
+    #[arg(long, short)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub sources: SourceArgs,
+    #[command(flatten)]
+    pub params: ParameterFlags,
+}
+
 #[derive(Debug, Args)]
 pub struct TopicsArgs {
     /// The recording (MCAP, ROS 1 bag, rosbag2 folder), several files of one mission, or a mission
@@ -386,6 +485,12 @@ pub struct SimulateArgs {
     /// With --grandtour: the same messages in one `<stamp>_merged.bag`.
     #[arg(long, requires = "grandtour")]
     pub merged: bool,
+    /// With --grandtour: a mission of several sources on several clocks, drawn from --seed: the prism
+    /// as reference, the INS on its clock, DLIO offset, the state estimator drifting, open3d_slam
+    /// stepping (`_open3d_slam.bag`), each with its own lever arm; --truth gets each source's clock
+    /// and lever. --duration sets the length (the step falls in its middle third).
+    #[arg(long, requires = "grandtour")]
+    pub multi_clock: bool,
 }
 
 #[derive(Debug, Args)]
@@ -437,6 +542,11 @@ pub struct BatchArgs {
     /// Also write each mission's self-contained HTML report, DIR/<mission>.html (summary.html links it).
     #[arg(long)]
     pub html: bool,
+    /// Audit every mission instead (`trajdrift audit`): DIR/<mission>.audit.json, and a summary listing
+    /// each mission's clock domains and the sources out of line. A folder's subfolder of recordings is
+    /// one mission; --reference/--preset pick the reference, every pose topic is a source.
+    #[arg(long)]
+    pub audit: bool,
     /// Print nothing but errors and warnings.
     #[arg(long, short)]
     pub quiet: bool,

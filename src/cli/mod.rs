@@ -37,6 +37,8 @@ pub fn run(cli: args::Cli) -> u8 {
     let result = match cli.command {
         args::Command::Eval(a) => commands::eval::run(*a),
         args::Command::Topics(a) => commands::topics::run(a),
+        args::Command::Audit(a) => commands::audit::run(*a),
+        args::Command::Restamp(a) => commands::restamp::run(*a),
         args::Command::Simulate(a) => commands::simulate::run(a),
         args::Command::Batch(a) => commands::batch::run(*a),
         args::Command::Merge(a) => commands::merge::run(a),

@@ -2,11 +2,13 @@
 //! so that it can be drawn from a report, from a sweep or from a test. [`mission_figures`] builds them
 //! all from a report and the trajectories it was computed from.
 
+pub mod clock_domains;
 pub mod de_distribution;
 pub mod drift_error;
 pub mod evo;
 pub mod mission;
 pub mod offset_curves;
+pub mod offset_matrix;
 pub mod offset_profile;
 pub mod offset_search;
 pub mod speed;

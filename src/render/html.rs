@@ -32,7 +32,7 @@ pub struct InlineFigure<'a> {
 }
 
 /// The SVG element of `svg` without any XML prologue, for inlining.
-fn svg_element(svg: &str) -> &str {
+pub fn svg_element(svg: &str) -> &str {
     svg.find("<svg").map_or(svg, |i| &svg[i..])
 }
 
@@ -41,7 +41,8 @@ fn num(v: Option<f64>, digits: usize) -> String {
         .map_or("–".into(), |x| format!("{x:.digits$}"))
 }
 
-fn table(head: &[&str], rows: &[Vec<String>]) -> String {
+/// A table with a header row; cells that start like a number are right-aligned.
+pub fn table(head: &[&str], rows: &[Vec<String>]) -> String {
     let mut s = String::from("<table><tr>");
     for h in head {
         let _ = write!(s, "<th>{}</th>", escape(h));

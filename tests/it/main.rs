@@ -7,6 +7,7 @@ mod robust_support;
 
 mod acceptance;
 mod annotate;
+mod audit;
 mod batch;
 mod batch_integrity;
 mod bounds;

@@ -46,6 +46,8 @@ fn commands() -> Vec<String> {
         "offset",
         "man",
         "completions",
+        "audit",
+        "restamp",
     ] {
         assert!(names.iter().any(|n| n == known), "{known} not in {names:?}");
     }

@@ -91,6 +91,50 @@ impl ClockCorrection {
         }
     }
 
+    /// Where `stamp` lands when a recording's stamps arrive in order (a copy that keeps every
+    /// message, `trajdrift restamp`), `last` the previous landing on the same channel. Like
+    /// [`Self::stamp`], except for a piecewise model where [`Self::stamp`] has no single answer: a
+    /// stamp that two segments take (a backward step repeated a stretch of stamps) goes to the one
+    /// that lands nearest `last` (time runs on continuously: a copy before the step lands beside the
+    /// previous message, a copy after it beyond the step), and a stamp no segment
+    /// takes (a forward step skipped it) goes by the segment it lands nearest to. So every stamp
+    /// maps; `None` only out of the i64 range.
+    pub fn stamp_in_stream(&self, stamp: i64, last: &mut Option<i64>) -> Option<i64> {
+        let out = match self {
+            ClockCorrection::Piecewise { segments } if !segments.is_empty() => {
+                let n = segments.len();
+                let mut taking: Vec<i64> = Vec::new();
+                let mut nearest: Option<(i64, i64)> = None;
+                for (i, &(start, end, offset_s)) in segments.iter().enumerate() {
+                    let t = stamp.checked_add(ns(offset_s))?;
+                    let after_start = i == 0 || t >= start;
+                    let before_end = i + 1 == n || t < end;
+                    if after_start && before_end {
+                        taking.push(t);
+                    }
+                    let miss = if after_start { t - end } else { start - t };
+                    if nearest.is_none_or(|(m, _)| miss < m) {
+                        nearest = Some((miss, t));
+                    }
+                }
+                match (taking.as_slice(), *last) {
+                    ([], _) => nearest.map(|(_, t)| t),
+                    ([one], _) => Some(*one),
+                    (many, Some(prev)) => many
+                        .iter()
+                        .copied()
+                        .min_by_key(|&t| (t - prev).unsigned_abs()),
+                    (many, None) => many.first().copied(),
+                }
+            }
+            _ => self.stamp(stamp),
+        };
+        if out.is_some() {
+            *last = out;
+        }
+        out
+    }
+
     /// The offset Δt (seconds) the correction gives at `t_s`, seconds on the reference clock: what a
     /// figure draws as the model; `None` where a piecewise model has no segment.
     pub fn offset_at_s(&self, t_s: f64) -> Option<f64> {
@@ -233,6 +277,61 @@ mod tests {
             ..report(OffsetModel::Piecewise)
         });
         assert_eq!(forward.stamp(9_500_000_000), None);
+    }
+
+    #[test]
+    fn a_stream_keeps_every_stamp_across_a_step() {
+        let seg = |a: f64, b: f64, o: f64| OffsetSegmentReport {
+            t_start: a,
+            t_end: b,
+            offset_s: o,
+            sigma_s: 0.001,
+        };
+        // Stepped back 1 s at 10 s: 9.0–9.9 then 9.2–… again; each copy lands in its own segment
+        // (9.45 arriving late, before the step, stays in the first).
+        let back = ClockCorrection::from_report(&TimeOffsetReport {
+            segments: vec![seg(0.0, 10.0, 0.0), seg(10.0, 20.0, 1.0)],
+            ..report(OffsetModel::Piecewise)
+        });
+        let mut last = None;
+        let got: Vec<i64> = [9.0, 9.5, 9.9, 9.2, 9.6, 10.5]
+            .iter()
+            .map(|s| back.stamp_in_stream((s * 1e9) as i64, &mut last).unwrap())
+            .collect();
+        assert_eq!(
+            got,
+            [
+                9_000_000_000,
+                9_500_000_000,
+                9_900_000_000,
+                10_200_000_000,
+                10_600_000_000,
+                11_500_000_000
+            ]
+        );
+        let mut last = None;
+        let got: Vec<i64> = [9.5, 9.45, 9.6]
+            .iter()
+            .map(|s| back.stamp_in_stream((s * 1e9) as i64, &mut last).unwrap())
+            .collect();
+        assert_eq!(got, [9_500_000_000, 9_450_000_000, 9_600_000_000]);
+        // Stepped forward: stamps 9–10 s never came, a late one maps by the nearest segment.
+        let forward = ClockCorrection::from_report(&TimeOffsetReport {
+            segments: vec![seg(0.0, 10.0, 1.0), seg(10.0, 20.0, 0.0)],
+            ..report(OffsetModel::Piecewise)
+        });
+        let mut last = None;
+        assert_eq!(
+            forward.stamp_in_stream(9_100_000_000, &mut last),
+            Some(10_100_000_000)
+        );
+        assert_eq!(
+            forward.stamp_in_stream(8_000_000_000, &mut last),
+            Some(9_000_000_000)
+        );
+        // Other models: as `stamp`.
+        let c = ClockCorrection::Constant { dt_ns: 5 };
+        assert_eq!(c.stamp_in_stream(10, &mut None), Some(15));
     }
 
     #[test]

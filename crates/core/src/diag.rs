@@ -20,6 +20,8 @@ pub enum WarningCode {
     LeverArmSuspected,
     /// The methods disagreed and the lever-arm explanation could not be checked.
     LeverArmUnchecked,
+    /// An audit's pairwise clock offsets do not add up around a triple of sources (closure).
+    ClockClosureFailed,
 }
 
 impl WarningCode {
@@ -33,6 +35,7 @@ impl WarningCode {
             WarningCode::ClockStepSuspected => "clock_step_suspected",
             WarningCode::LeverArmSuspected => "lever_arm_suspected",
             WarningCode::LeverArmUnchecked => "lever_arm_unchecked",
+            WarningCode::ClockClosureFailed => "clock_closure_failed",
         }
     }
 }
@@ -74,6 +77,7 @@ mod tests {
             WarningCode::ClockStepSuspected,
             WarningCode::LeverArmSuspected,
             WarningCode::LeverArmUnchecked,
+            WarningCode::ClockClosureFailed,
         ] {
             assert_eq!(
                 serde_json::to_string(&c).unwrap(),

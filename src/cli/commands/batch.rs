@@ -11,9 +11,60 @@ use trajdrift::report::escape::escape;
 use crate::cli::args::{BatchArgs, PlotFormatArg};
 use crate::cli::batch_progress::BatchBars;
 
+/// `batch --audit`: every mission audited; the summary lists each mission's clock domains and the
+/// sources out of line.
+fn run_audit(a: &BatchArgs) -> Result<u8> {
+    use trajdrift::audit::discover::SourceRequest;
+    use trajdrift::batch::audit::{from_manifest, missions_in, run_audit_batch};
+    if a.annotate || a.plot || a.shard.is_some() || a.skip_existing {
+        return Err(trajdrift::Error::InvalidArgument(
+            "--audit runs with --out, --jobs, --html, --reference, --estimate, --preset and the evaluation parameters; not with --annotate, --plot, --shard or --skip-existing".into(),
+        )
+        .into());
+    }
+    let missions = if a.input.is_dir() {
+        let request = SourceRequest {
+            reference: a.reference.clone(),
+            sources: a.estimate.clone(),
+            preset: a.preset.clone(),
+        };
+        missions_in(&a.input, &request, &a.params.0)?
+    } else {
+        from_manifest(&Manifest::from_toml(&a.input, &a.params.0)?)
+    };
+    let bars = BatchBars::new(a.quiet);
+    let summary = run_audit_batch(&missions, &a.out, a.jobs.unwrap_or(0), a.html, &|e| {
+        bars.event(e)
+    });
+    bars.finish();
+    let summary = summary.map_err(|e| anyhow!(e))?;
+    for m in &summary.missions {
+        if let Some(e) = &m.error {
+            eprintln!("error: mission {}: {}", m.mission, e);
+        }
+    }
+    if !a.quiet {
+        crate::cli::emit(&summary.to_markdown())?;
+        eprintln!(
+            "{} missions audited, {} failed; results in {}",
+            summary.missions.len(),
+            summary
+                .missions
+                .iter()
+                .filter(|m| m.status != trajdrift::batch::audit::MissionStatus::Ok)
+                .count(),
+            a.out.display()
+        );
+    }
+    Ok(summary.exit_code())
+}
+
 /// Runs the command; returns the exit code, as `eval`'s: 1 when a mission failed, else 3 when a mission
 /// finished with a warning (the summary says which), else 0.
 pub fn run(a: BatchArgs) -> Result<u8> {
+    if a.audit {
+        return run_audit(&a);
+    }
     let manifest = manifest_from_args(&a)?;
     let opts = options_from_args(&a)?;
     let bars = BatchBars::new(a.quiet);

@@ -1,6 +1,7 @@
 //! One handler per command: turn arguments into a library call, print the result.
 
 pub mod ape;
+pub mod audit;
 pub mod batch;
 pub mod completions;
 pub mod eval;
@@ -10,6 +11,7 @@ pub mod merge;
 pub mod metric;
 pub mod offset;
 pub mod res;
+pub mod restamp;
 pub mod rpe;
 pub mod simulate;
 pub mod sweep;

@@ -25,7 +25,12 @@ fn claim_outputs(a: &SimulateArgs) -> Result<()> {
     let mut guard = OutputGuard::default();
     if a.grandtour {
         guard.claim_dir("OUT", &a.out)?;
-        for f in grandtour_files(&a.out, &grandtour_options(a)) {
+        let files = if a.multi_clock {
+            trajdrift::simulate::grandtour::multi_clock_files(&a.out, a.merged)
+        } else {
+            grandtour_files(&a.out, &grandtour_options(a))
+        };
+        for f in files {
             guard.claim("OUT", &f)?;
         }
     } else {
@@ -59,6 +64,26 @@ fn grandtour(
     Ok(EXIT_OK)
 }
 
+/// `--grandtour --multi-clock`: several sources on several clocks, as per-sensor bags.
+fn multi_clock(a: &SimulateArgs, route: &[trajdrift::simulate::motion::Segment]) -> Result<u8> {
+    use trajdrift::simulate::grandtour::{write_multi_clock, PRISM_TOPIC};
+    use trajdrift::simulate::sources::{multi_clock_truth, simulate_sources, MultiClockConfig};
+    let duration: f64 = route.iter().map(|s| s.duration_s).sum();
+    let mission = simulate_sources(&MultiClockConfig::varied(a.seed, duration), route);
+    let files = write_multi_clock(&a.out, &mission, a.merged)?;
+    if let Some(path) = &a.truth {
+        write_json(path, &multi_clock_truth(&mission, PRISM_TOPIC))?;
+    }
+    eprintln!(
+        "wrote {} ({} bags, {} sources, {:.0} s)",
+        a.out.display(),
+        files.len(),
+        mission.sources.len() + 1,
+        mission.duration_s
+    );
+    Ok(EXIT_OK)
+}
+
 /// Runs the command; returns the exit code.
 pub fn run(a: SimulateArgs) -> Result<u8> {
     if a.out.exists() && !a.force {
@@ -84,6 +109,9 @@ pub fn run(a: SimulateArgs) -> Result<u8> {
             .flatten()
             .collect(),
     };
+    if a.multi_clock {
+        return multi_clock(&a, &route);
+    }
     let mission = simulate(&config, &route);
     let bulk_messages = (mission.duration_s * 10.0).max(1.0);
     let bulk_bytes = (a.bulk_mib as f64 * 1024.0 * 1024.0 / bulk_messages) as usize;

@@ -17,6 +17,11 @@
 //! and the static `base → hesai_lidar` compose, across two bags, into the DLIO pose again
 //! (`/tf:dlio_map:hesai_lidar`). `bulk_bytes` adds a 10 Hz `sensor_msgs/PointCloud2` channel to every
 //! sensor bag (what a memory benchmark needs: large files whose bulk we must skip).
+//!
+//! [`write_multi_clock`] (`--grandtour --multi-clock`) writes a mission of several sources on several
+//! clocks instead ([`crate::simulate::sources`]): the prism as reference and the INS, DLIO, the state
+//! estimator and open3d_slam (`_open3d_slam.bag`, `/open3d_slam/odometry`) each in its own bag on its
+//! own clock, what `trajdrift audit` and `trajdrift restamp` are tested on.
 
 use std::io::{Seek, Write};
 use std::path::{Path, PathBuf};
@@ -40,6 +45,8 @@ pub const PRISM_TOPIC: &str = "/boxi/ap20/prism_position";
 pub const DLIO_TOPIC: &str = "/boxi/dlio/lidar_map_odometry";
 /// The ANYmal state estimator.
 pub const STATE_ESTIMATOR_TOPIC: &str = "/anymal/state_estimator/odometry";
+/// open3d_slam lidar odometry (in the multi-clock layout only).
+pub const OPEN3D_SLAM_TOPIC: &str = "/open3d_slam/odometry";
 /// The bulk channel (`bulk_bytes` > 0).
 pub const BULK_TOPIC: &str = "/boxi/hesai/points";
 /// The TF chain that composes the `/tf` edge of `_dlio.bag` with `/tf_static` of `_tf_minimal.bag`.
@@ -55,6 +62,8 @@ pub enum GrandTourBag {
     Dlio,
     StateEstimator,
     TfMinimal,
+    /// open3d_slam's bag, in the multi-clock layout ([`write_multi_clock`]).
+    Open3dSlam,
 }
 
 impl GrandTourBag {
@@ -75,6 +84,7 @@ impl GrandTourBag {
             GrandTourBag::Dlio => "dlio",
             GrandTourBag::StateEstimator => "anymal_state",
             GrandTourBag::TfMinimal => "tf_minimal",
+            GrandTourBag::Open3dSlam => "open3d_slam",
         };
         format!("{STAMP}_{group}.bag")
     }
@@ -283,7 +293,7 @@ fn bulk_message(seq: u32, stamp: i64, n: usize) -> Vec<u8> {
 /// removed on failure).
 fn write_bag(
     path: &Path,
-    mission: &Mission,
+    span: (i64, f64),
     all: &[Message],
     bags: &[GrandTourBag],
     bulk_bytes: usize,
@@ -293,20 +303,15 @@ fn write_bag(
         .file()
         .try_clone()
         .map_err(|e| Error::output(path, &e))?;
-    write_bag_to(
-        std::io::BufWriter::new(file),
-        mission,
-        all,
-        bags,
-        bulk_bytes,
-    )
-    .map_err(|e| Error::output(path, &e))?;
+    write_bag_to(std::io::BufWriter::new(file), span, all, bags, bulk_bytes)
+        .map_err(|e| Error::output(path, &e))?;
     target.commit()
 }
 
+/// `span`: the mission's start (ns) and duration (s), which the bulk channel covers.
 fn write_bag_to<W: Write + Seek>(
     out: W,
-    mission: &Mission,
+    (t0, duration_s): (i64, f64),
     all: &[Message],
     bags: &[GrandTourBag],
     bulk_bytes: usize,
@@ -326,11 +331,10 @@ fn write_bag_to<W: Write + Seek>(
         .filter(|b| **b != GrandTourBag::TfMinimal)
         .count();
     let n_bulk = if bulk_bytes > 0 && sensor_bags > 0 {
-        (mission.duration_s * 10.0) as usize * sensor_bags
+        (duration_s * 10.0) as usize * sensor_bags
     } else {
         0
     };
-    let t0 = mission.config.start_time_ns;
     // Bulk messages interleaved by time, generated as they are written (never all in memory).
     let bulk_time = |k: usize| t0 + (k / sensor_bags.max(1)) as i64 * 100_000_000 + 1;
     let mut k = 0;
@@ -384,10 +388,11 @@ pub fn write_grandtour(
 ) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|e| Error::output(dir, &e))?;
     let all = messages(mission);
+    let span = (mission.config.start_time_ns, mission.duration_s);
     let mut written = Vec::new();
     if options.merged {
         let path = dir.join(format!("{STAMP}_merged.bag"));
-        write_bag(&path, mission, &all, &options.bags, options.bulk_bytes)?;
+        write_bag(&path, span, &all, &options.bags, options.bulk_bytes)?;
         written.push(path);
     } else {
         for &bag in &options.bags {
@@ -397,10 +402,195 @@ pub fn write_grandtour(
             } else {
                 options.bulk_bytes
             };
-            write_bag(&path, mission, &all, &[bag], bulk)?;
+            write_bag(&path, span, &all, &[bag], bulk)?;
             written.push(path);
         }
     }
     written.sort();
     Ok(written)
+}
+
+/// The bag and message type of each source of a multi-clock mission, by name.
+fn multi_clock_bag(name: &str) -> GrandTourBag {
+    match name {
+        "ins" => GrandTourBag::Ins,
+        "dlio" => GrandTourBag::Dlio,
+        "state_estimator" => GrandTourBag::StateEstimator,
+        _ => GrandTourBag::Open3dSlam,
+    }
+}
+
+/// The frames a multi-clock source publishes in: (frame, child frame).
+fn multi_clock_frames(name: &str) -> (&'static str, &'static str) {
+    match name {
+        "ins" => ("enu_origin", "cpt7_imu"),
+        "dlio" => ("dlio_map", "hesai_lidar"),
+        "state_estimator" => ("odom", "base"),
+        _ => ("open3d_map", "livox_lidar"),
+    }
+}
+
+/// The bags of the multi-clock layout ([`write_multi_clock`]), in name order.
+pub fn multi_clock_files(dir: &Path, merged: bool) -> Vec<PathBuf> {
+    if merged {
+        return vec![dir.join(format!("{STAMP}_merged.bag"))];
+    }
+    let mut v: Vec<PathBuf> = MULTI_CLOCK_BAGS
+        .iter()
+        .map(|b| dir.join(b.file_name()))
+        .collect();
+    v.sort();
+    v
+}
+
+/// The bags of the multi-clock layout.
+const MULTI_CLOCK_BAGS: [GrandTourBag; 6] = [
+    GrandTourBag::TfMinimal,
+    GrandTourBag::Prism,
+    GrandTourBag::Ins,
+    GrandTourBag::Dlio,
+    GrandTourBag::StateEstimator,
+    GrandTourBag::Open3dSlam,
+];
+
+/// Writes a multi-source mission ([`crate::simulate::sources`]) GrandTour's way: the prism (the
+/// reference, on the true clock) in `_ap20_prism_position.bag`, each source in its own bag on its own
+/// clock (header stamps and record times both read that clock, as a per-computer recorder writes them):
+/// the INS in `_cpt7_ie_tc.bag`, DLIO with its `/tf` edge `dlio_map → base` in `_dlio.bag`, the state
+/// estimator in `_anymal_state.bag`, open3d_slam in `_open3d_slam.bag`, and the static levers
+/// (`base → hesai_lidar`, `prism`, `cpt7_imu`) in `_tf_minimal.bag`. `merged`: all of it in one
+/// `<stamp>_merged.bag`. Returns the files written, in name order.
+pub fn write_multi_clock(
+    dir: &Path,
+    mission: &crate::simulate::sources::MultiClockMission,
+    merged: bool,
+) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::output(dir, &e))?;
+    let c = &mission.config;
+    let t0 = c.start_time_ns;
+    let mut all = vec![multi_clock_static_tf(mission)];
+    for (i, (&t, p)) in mission
+        .reference
+        .stamps_ns
+        .iter()
+        .zip(&mission.reference.positions)
+        .enumerate()
+    {
+        all.push(Message {
+            time: t,
+            bag: GrandTourBag::Prism,
+            topic: PRISM_TOPIC,
+            type_name: "geometry_msgs/PointStamped",
+            data: ros1::encode_point_stamped(
+                i as u32,
+                &PointStamped {
+                    header: header(t, "leica_total_station"),
+                    point: point(p),
+                },
+            ),
+        });
+    }
+    for (spec, traj) in c.sources.iter().zip(&mission.sources) {
+        source_messages(spec, traj, &mut all);
+    }
+    all.sort_by_key(|m| m.time);
+    let span = (t0, mission.duration_s);
+    let bags = MULTI_CLOCK_BAGS;
+    let mut written = Vec::new();
+    if merged {
+        let path = dir.join(format!("{STAMP}_merged.bag"));
+        write_bag(&path, span, &all, &bags[..], 0)?;
+        written.push(path);
+    } else {
+        for &bag in &bags {
+            let path = dir.join(bag.file_name());
+            write_bag(&path, span, &all, &[bag], 0)?;
+            written.push(path);
+        }
+    }
+    written.sort();
+    Ok(written)
+}
+
+fn iso(v: Vector3<f64>) -> Isometry3<f64> {
+    Isometry3::from_parts(Translation3::from(v), UnitQuaternion::identity())
+}
+
+/// `/tf_static`: the lidar's, the prism's and the INS's place on the body.
+fn multi_clock_static_tf(mission: &crate::simulate::sources::MultiClockMission) -> Message {
+    let c = &mission.config;
+    let t0 = c.start_time_ns;
+    let lever_of = |name: &str| {
+        c.sources
+            .iter()
+            .find(|s| s.name == name)
+            .map_or(Vector3::zeros(), |s| Vector3::from(s.lever_m))
+    };
+    Message {
+        time: t0,
+        bag: GrandTourBag::TfMinimal,
+        topic: "/tf_static",
+        type_name: "tf2_msgs/TFMessage",
+        data: ros1::encode_tf_message(
+            0,
+            &TFMessage {
+                transforms: vec![
+                    transform(t0, "base", "hesai_lidar", &iso(lever_of("dlio"))),
+                    transform(t0, "base", "prism", &iso(Vector3::zeros())),
+                    transform(t0, "base", "cpt7_imu", &iso(lever_of("ins"))),
+                ],
+            },
+        ),
+    }
+}
+
+/// One source's odometry messages (and DLIO's TF), on its own clock.
+fn source_messages(
+    spec: &crate::simulate::sources::SourceSpec,
+    traj: &crate::trajectory::Trajectory,
+    all: &mut Vec<Message>,
+) {
+    let topic: &'static str = match spec.name.as_str() {
+        "ins" => INS_TOPIC,
+        "dlio" => DLIO_TOPIC,
+        "state_estimator" => STATE_ESTIMATOR_TOPIC,
+        _ => OPEN3D_SLAM_TOPIC,
+    };
+    let bag = multi_clock_bag(&spec.name);
+    let (frame, child) = multi_clock_frames(&spec.name);
+    let lever = iso(Vector3::from(spec.lever_m));
+    let orientations = traj.orientations.as_deref().unwrap_or(&[]);
+    for (i, (&t, p)) in traj.stamps_ns.iter().zip(&traj.positions).enumerate() {
+        let q = orientations
+            .get(i)
+            .copied()
+            .unwrap_or_else(UnitQuaternion::identity);
+        let pose = Isometry3::from_parts(Translation3::from(*p), q);
+        all.push(Message {
+            time: t,
+            bag,
+            topic,
+            type_name: "nav_msgs/Odometry",
+            data: odometry(i as u32, t, frame, child, &pose),
+        });
+        if spec.name == "dlio" {
+            all.push(Message {
+                time: t,
+                bag,
+                topic: "/tf",
+                type_name: "tf2_msgs/TFMessage",
+                data: ros1::encode_tf_message(
+                    i as u32,
+                    &TFMessage {
+                        transforms: vec![transform(
+                            t,
+                            "dlio_map",
+                            "base",
+                            &(pose * lever.inverse()),
+                        )],
+                    },
+                ),
+            });
+        }
+    }
 }

@@ -7,6 +7,7 @@
 pub mod grandtour;
 pub mod motion;
 pub mod ros1_definitions;
+pub mod sources;
 pub mod writer;
 
 use nalgebra::{UnitQuaternion, Vector3};
@@ -93,6 +94,17 @@ impl Default for MissionConfig {
             scale_error: 0.02,
             clock_drift_ppm: 0.0,
             clock_step: None,
+        }
+    }
+}
+
+impl MissionConfig {
+    /// The estimate's clock ([`sources::SourceClock`], the one stamping rule of every simulated source).
+    pub fn clock(&self) -> sources::SourceClock {
+        sources::SourceClock {
+            offset_s: self.time_offset_s,
+            drift_ppm: self.clock_drift_ppm,
+            step: self.clock_step,
         }
     }
 }
@@ -197,12 +209,7 @@ pub fn simulate(config: &MissionConfig, route: &[Segment]) -> Mission {
         let (p, r) = sensor(t_true, &est_lever);
         let local = r0.inverse() * (p - p0) * (1.0 + config.scale_error);
         let noise = white(&mut rng, config.est_noise_m);
-        let t_clock = t_true * (1.0 + config.clock_drift_ppm * 1e-6);
-        let offset = match config.clock_step {
-            Some(s) if t_true >= s.at_s => s.offset_s,
-            _ => config.time_offset_s,
-        };
-        let stamp = config.start_time_ns + ((t_clock - offset) * 1e9).round() as i64;
+        let stamp = config.clock().stamp_ns(config.start_time_ns, t_true);
         if estimate.stamps_ns.last().is_some_and(|&last| stamp <= last) {
             continue;
         }
@@ -218,7 +225,7 @@ pub fn simulate(config: &MissionConfig, route: &[Segment]) -> Mission {
 }
 
 /// Three independent Gaussian samples of standard deviation `sigma`.
-fn white(rng: &mut ChaCha8Rng, sigma: f64) -> Vector3<f64> {
+pub(crate) fn white(rng: &mut ChaCha8Rng, sigma: f64) -> Vector3<f64> {
     let mut g = || -> f64 { StandardNormal.sample(rng) };
     Vector3::new(g(), g(), g()) * sigma
 }

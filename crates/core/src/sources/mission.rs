@@ -105,6 +105,80 @@ impl Mission {
         &self.parts
     }
 
+    /// [`Recording::pass`], telling `on_message` which file (its index in [`Mission::parts`]) each
+    /// message came from: what a copy needs that treats each file's messages by the file's clock.
+    pub fn pass_parts(
+        &self,
+        select: Select<'_>,
+        progress: Progress<'_>,
+        on_message: &mut dyn FnMut(usize, &ChannelInfo, &MessageRef<'_>) -> Result<()>,
+    ) -> Result<StreamOutcome> {
+        // Both callbacks of a file's pass need the channels: `select` adds to them, `on_message` reads.
+        let channels = RefCell::new(Channels::default());
+        // Global id → selected; asked once per mission channel.
+        let mut selected: HashMap<u16, bool> = HashMap::new();
+        let mut out = StreamOutcome::default();
+        let mut done = 0u64;
+        let failure: RefCell<Option<Error>> = RefCell::new(None);
+        *self.truncated.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        for (i, part) in self.parts.iter().enumerate() {
+            // Local id → global id, for this file's pass.
+            let local: RefCell<HashMap<u16, u16>> = RefCell::new(HashMap::new());
+            let before = done;
+            let o = part.pass(
+                &mut |c| {
+                    let mut chs = channels.borrow_mut();
+                    let Ok(id) = chs.global(i, c) else {
+                        return false;
+                    };
+                    local.borrow_mut().insert(c.id, id);
+                    let g = chs.list[id as usize].clone();
+                    let wanted = *selected.entry(id).or_insert_with(|| select(&g));
+                    let mut f = failure.borrow_mut();
+                    if wanted && f.is_none() && chs.conflict(&g).is_some() {
+                        *f = Some(self.type_conflict(&chs, &g, i));
+                    }
+                    wanted
+                },
+                &|n| progress(before + n),
+                &mut |c, m| {
+                    if let Some(e) = failure.borrow_mut().take() {
+                        return Err(e);
+                    }
+                    let id = local.borrow().get(&c.id).copied().unwrap_or(c.id);
+                    let chs = channels.borrow();
+                    on_message(
+                        i,
+                        &chs.list[id as usize],
+                        &MessageRef {
+                            channel_id: id,
+                            ..*m
+                        },
+                    )
+                },
+            )?;
+            if let Some(e) = failure.borrow_mut().take() {
+                return Err(e);
+            }
+            let mut chs = channels.borrow_mut();
+            for c in &o.channels {
+                let id = chs.global(i, c)?;
+                *out.message_counts.entry(id).or_default() +=
+                    o.message_counts.get(&c.id).copied().unwrap_or(0);
+            }
+            if let Some(offset) = o.truncated_at {
+                out.truncated_at = Some(done + offset);
+                *self.truncated.lock().unwrap_or_else(|e| e.into_inner()) = Some((i, offset));
+            }
+            done += part.recording_size();
+            progress(done);
+        }
+        let channels = channels.into_inner();
+        out.channels = channels.list;
+        out.bytes_read = done;
+        Ok(out)
+    }
+
     fn type_conflict(&self, channels: &Channels, c: &ChannelInfo, part: usize) -> Error {
         let other = channels.conflict(c);
         let (other_type, other_part) = other
@@ -166,69 +240,7 @@ impl Recording for Mission {
         progress: Progress<'_>,
         on_message: OnMessage<'_>,
     ) -> Result<StreamOutcome> {
-        // Both callbacks of a file's pass need the channels: `select` adds to them, `on_message` reads.
-        let channels = RefCell::new(Channels::default());
-        // Global id → selected; asked once per mission channel.
-        let mut selected: HashMap<u16, bool> = HashMap::new();
-        let mut out = StreamOutcome::default();
-        let mut done = 0u64;
-        let failure: RefCell<Option<Error>> = RefCell::new(None);
-        *self.truncated.lock().unwrap_or_else(|e| e.into_inner()) = None;
-        for (i, part) in self.parts.iter().enumerate() {
-            // Local id → global id, for this file's pass.
-            let local: RefCell<HashMap<u16, u16>> = RefCell::new(HashMap::new());
-            let before = done;
-            let o = part.pass(
-                &mut |c| {
-                    let mut chs = channels.borrow_mut();
-                    let Ok(id) = chs.global(i, c) else {
-                        return false;
-                    };
-                    local.borrow_mut().insert(c.id, id);
-                    let g = chs.list[id as usize].clone();
-                    let wanted = *selected.entry(id).or_insert_with(|| select(&g));
-                    let mut f = failure.borrow_mut();
-                    if wanted && f.is_none() && chs.conflict(&g).is_some() {
-                        *f = Some(self.type_conflict(&chs, &g, i));
-                    }
-                    wanted
-                },
-                &|n| progress(before + n),
-                &mut |c, m| {
-                    if let Some(e) = failure.borrow_mut().take() {
-                        return Err(e);
-                    }
-                    let id = local.borrow().get(&c.id).copied().unwrap_or(c.id);
-                    let chs = channels.borrow();
-                    on_message(
-                        &chs.list[id as usize],
-                        &MessageRef {
-                            channel_id: id,
-                            ..*m
-                        },
-                    )
-                },
-            )?;
-            if let Some(e) = failure.borrow_mut().take() {
-                return Err(e);
-            }
-            let mut chs = channels.borrow_mut();
-            for c in &o.channels {
-                let id = chs.global(i, c)?;
-                *out.message_counts.entry(id).or_default() +=
-                    o.message_counts.get(&c.id).copied().unwrap_or(0);
-            }
-            if let Some(offset) = o.truncated_at {
-                out.truncated_at = Some(done + offset);
-                *self.truncated.lock().unwrap_or_else(|e| e.into_inner()) = Some((i, offset));
-            }
-            done += part.recording_size();
-            progress(done);
-        }
-        let channels = channels.into_inner();
-        out.channels = channels.list;
-        out.bytes_read = done;
-        Ok(out)
+        self.pass_parts(select, progress, &mut |_, c, m| on_message(c, m))
     }
 
     fn truncation_warning(&self, offset: u64) -> Warning {
