@@ -6,8 +6,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use trajdrift::eval::config::{EvalConfig, NamedInput};
-use trajdrift::eval::evaluate;
+use trajdrift::evaluate;
+use trajdrift::{EvalConfig, NamedInput};
 
 fn main() {
     let shared = std::env::var("TRAJDRIFT_SHARED")
@@ -34,7 +34,7 @@ fn main() {
         let reps = 3;
         let start = Instant::now();
         for _ in 0..reps {
-            let r = evaluate(&c, &|_| {});
+            let r = evaluate(&c);
             if let Err(e) = r {
                 eprintln!("speed: {m}: {e}");
             }
@@ -64,7 +64,7 @@ fn long_mission() {
     );
     c.params.window = Some(vec![1.0, 5.0, 10.0, 20.0]);
     let start = Instant::now();
-    match evaluate(&c, &|_| {}) {
+    match evaluate(&c) {
         Ok(r) => {
             let o = &r.estimates[0].time_offset;
             println!(

@@ -38,7 +38,7 @@ pub enum JobEvent {
     /// Bytes read so far in a pass.
     Read { pass: Pass, bytes: u64 },
     /// A pass ended.
-    PassDone(Pass),
+    PassDone,
 }
 
 /// What a job did.
@@ -84,7 +84,7 @@ pub fn run(
             bytes,
         })
     });
-    progress(JobEvent::PassDone(Pass::Evaluate));
+    progress(JobEvent::PassDone);
     let (report, inputs) = evaluated?;
     let annotated = match &outputs.annotate {
         Some(out) => {
@@ -94,7 +94,7 @@ pub fn run(
                     bytes,
                 })
             });
-            progress(JobEvent::PassDone(Pass::Annotate));
+            progress(JobEvent::PassDone);
             Some(done?)
         }
         None => None,

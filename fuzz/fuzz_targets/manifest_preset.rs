@@ -6,18 +6,11 @@
 mod common;
 
 use libfuzzer_sys::fuzz_target;
-use trajdrift::batch::manifest::Manifest;
-use trajdrift::eval::parameters::Parameters;
-use trajdrift::eval::preset::Preset;
 
 fuzz_target!(|data: &[u8]| {
     let Some((&pick, rest)) = data.split_first() else {
         return;
     };
     let path = common::scratch(rest, "toml");
-    if pick % 2 == 0 {
-        let _ = Manifest::from_toml(&path, &Parameters::default());
-    } else {
-        let _ = Preset::load(&path.to_string_lossy());
-    }
+    trajdrift::fuzzing::read_manifest_or_preset(&path, pick % 2 == 0);
 });

@@ -7,8 +7,6 @@ use std::path::PathBuf;
 use std::sync::OnceLock;
 
 use libfuzzer_sys::fuzz_target;
-use trajdrift::batch::merge::read_set;
-use trajdrift::batch::summary::Summary;
 
 /// This process's scratch folder, with a run record of one mission `m`.
 fn folder() -> &'static PathBuf {
@@ -33,13 +31,5 @@ fn folder() -> &'static PathBuf {
 fuzz_target!(|data: &[u8]| {
     let dir = folder();
     std::fs::write(dir.join("m.json"), data).expect("scratch file");
-    if let Ok(set) = read_set(std::slice::from_ref(dir)) {
-        let mut s = Summary::build(&set.results);
-        s.partial = !set.problems.is_empty();
-        s.problems = set.problems;
-        let _ = serde_json::to_vec(&s);
-        let _ = s.to_csv();
-        let _ = s.to_markdown();
-        let _ = trajdrift::batch::summary_html::render(&s, dir);
-    }
+    trajdrift::fuzzing::merge_folder(dir);
 });

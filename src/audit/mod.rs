@@ -64,12 +64,10 @@ pub struct AuditConfig {
     pub params: Parameters,
 }
 
-/// An audit and the trajectories it was computed from (for figures).
+/// An audit and what the user should know about how it was made.
 #[derive(Debug, Clone)]
 pub struct AuditOutcome {
     pub report: AuditReport,
-    /// Per source (the reference first), its trajectory on its own clock.
-    pub trajectories: Vec<(String, Trajectory)>,
     /// What the user should know about choices made (the reference picked, …).
     pub notes: Vec<String>,
 }
@@ -117,10 +115,6 @@ pub fn audit(config: &AuditConfig, progress: Progress<'_>) -> Result<AuditOutcom
     let report = build(config, &found, &sources, &evaluations, read_warnings)?;
     Ok(AuditOutcome {
         report,
-        trajectories: sources
-            .into_iter()
-            .map(|s| (s.name, s.trajectory))
-            .collect(),
         notes: found.notes,
     })
 }

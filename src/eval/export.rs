@@ -18,14 +18,6 @@ use crate::trajectory::Trajectory;
 
 /// The file one estimate is exported to: `file` itself when there is one estimate, else `file` with
 /// `.NAME` inserted before its extension.
-///
-/// ```
-/// use std::path::{Path, PathBuf};
-/// use trajdrift::eval::export::aligned_path;
-/// assert_eq!(aligned_path(Path::new("out/al.tum"), "lio", 1), PathBuf::from("out/al.tum"));
-/// assert_eq!(aligned_path(Path::new("out/al.tum"), "estimate/odom", 2), PathBuf::from("out/al.estimate_odom.tum"));
-/// assert_eq!(aligned_path(Path::new("al"), "lio", 2), PathBuf::from("al.lio"));
-/// ```
 pub fn aligned_path(file: &Path, name: &str, n_estimates: usize) -> PathBuf {
     if n_estimates <= 1 {
         return file.to_path_buf();
@@ -48,4 +40,26 @@ pub fn write_aligned(path: &Path, traj: &Trajectory) -> Result<()> {
     // Writing into a Vec cannot fail.
     let _ = write_tum(&mut bytes, traj);
     write_output(path, &bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn aligned_path_names_each_estimates_file() {
+        use std::path::{Path, PathBuf};
+        assert_eq!(
+            aligned_path(Path::new("out/al.tum"), "lio", 1),
+            PathBuf::from("out/al.tum")
+        );
+        assert_eq!(
+            aligned_path(Path::new("out/al.tum"), "estimate/odom", 2),
+            PathBuf::from("out/al.estimate_odom.tum")
+        );
+        assert_eq!(
+            aligned_path(Path::new("al"), "lio", 2),
+            PathBuf::from("al.lio")
+        );
+    }
 }

@@ -40,9 +40,6 @@ fn data_span_s(inputs: &Inputs) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// Every method the offset search runs (the applied one is `EvalConfig::offset_method`).
-pub const OFFSET_METHODS: [OffsetMethod; 3] = crate::align::auto_offset::AUTO_METHODS;
-
 /// Runs the whole evaluation. Warnings the user must see (a weak offset, a truncated recording) are in
 /// `Report::warnings`; the CLI exits with code 3 when there is any.
 pub fn evaluate(config: &EvalConfig, progress: Progress<'_>) -> Result<Report> {

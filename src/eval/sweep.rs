@@ -33,16 +33,6 @@ pub enum SweepParam {
 }
 
 impl SweepParam {
-    pub const ALL: [SweepParam; 7] = [
-        SweepParam::EpsMin,
-        SweepParam::CurvatureEps,
-        SweepParam::PathEps,
-        SweepParam::Window,
-        SweepParam::LeverArm,
-        SweepParam::Overlap,
-        SweepParam::TimeOffset,
-    ];
-
     /// The name as on the command line (and in the CSV).
     pub fn as_str(self) -> &'static str {
         match self {

@@ -422,13 +422,6 @@ fn mission_of(r: &EvoResult) -> String {
 
 /// A short, still distinct name for each of `missions` (full reference names): the file name, or as
 /// many trailing path components as it takes (`lever_arm/reference.tum`).
-///
-/// ```
-/// use trajdrift::evo::res::short_names;
-/// let m = ["/d/a/reference.tum".to_string(), "/d/b/reference.tum".to_string()];
-/// assert_eq!(short_names(&m), ["a/reference.tum", "b/reference.tum"]);
-/// assert_eq!(short_names(&m[..1]), ["reference.tum"]);
-/// ```
 pub fn short_names(missions: &[String]) -> Vec<String> {
     let tail = |m: &str, k: usize| {
         let parts: Vec<&str> = m.split('/').filter(|p| !p.is_empty()).collect();
@@ -646,4 +639,19 @@ fn aligned(rows: &[Vec<String>]) -> String {
                 + "\n"
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn short_names_take_as_many_components_as_they_need() {
+        let m = [
+            "/d/a/reference.tum".to_string(),
+            "/d/b/reference.tum".to_string(),
+        ];
+        assert_eq!(short_names(&m), ["a/reference.tum", "b/reference.tum"]);
+        assert_eq!(short_names(&m[..1]), ["reference.tum"]);
+    }
 }

@@ -8,12 +8,6 @@
 //! r (the scatter between missions contains the run-to-run scatter); with one mission, Welch's interval
 //! from the two sets of runs. B is called better (worse) only when the whole 95 % interval of r lies
 //! below (above) zero.
-//!
-//! ```
-//! use trajdrift::evo::runs::{mean_interval, Verdict};
-//! let m = mean_interval(&[1.0, 1.1, 0.9, 1.0]).unwrap();
-//! assert!((m.mean - 1.0).abs() < 1e-12 && m.half_width > 0.1 && m.half_width < 0.2);
-//! ```
 
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
@@ -162,13 +156,6 @@ pub fn compare(missions: &[MissionPair]) -> Comparison {
 
 /// The estimator a result file belongs to for `--runs`/`--compare`: its file name without the
 /// extension and a trailing run number (`orb_03.zip`, `orb-run3.zip` → `orb`, `orb-run`).
-///
-/// ```
-/// use trajdrift::evo::runs::estimator_of;
-/// assert_eq!(estimator_of(std::path::Path::new("res/orb_03.zip")), "orb");
-/// assert_eq!(estimator_of(std::path::Path::new("vins.zip")), "vins");
-/// assert_eq!(estimator_of(std::path::Path::new("12.zip")), "12");
-/// ```
 pub fn estimator_of(path: &std::path::Path) -> String {
     let stem = path
         .file_stem()
@@ -187,6 +174,19 @@ pub fn estimator_of(path: &std::path::Path) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn mean_interval_of_four_runs() {
+        let m = mean_interval(&[1.0, 1.1, 0.9, 1.0]).unwrap();
+        assert!((m.mean - 1.0).abs() < 1e-12 && m.half_width > 0.1 && m.half_width < 0.2);
+    }
+
+    #[test]
+    fn estimator_of_drops_the_run_number() {
+        assert_eq!(estimator_of(std::path::Path::new("res/orb_03.zip")), "orb");
+        assert_eq!(estimator_of(std::path::Path::new("vins.zip")), "vins");
+        assert_eq!(estimator_of(std::path::Path::new("12.zip")), "12");
+    }
     use rand::{Rng, SeedableRng};
 
     #[test]

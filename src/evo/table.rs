@@ -4,16 +4,6 @@
 //! right-justified to its widest cell, the index left-justified, and the columns wrapped into blocks
 //! no wider than 80 characters with ` \` at the end of every block but the last (pandas'
 //! `StringFormatter._join_multiline` and `_binify`, pandas 2 and 3).
-//!
-//! ```
-//! use trajdrift::evo::table::pandas_table;
-//! let t = pandas_table(
-//!     &["a.txt".into(), "b.txt".into()],
-//!     &["rmse".into(), "min".into()],
-//!     &[vec![Some(0.008119), Some(0.00035)], vec![Some(1.30345), Some(2.0)]],
-//! );
-//! assert_eq!(t, "           rmse      min\na.txt  0.008119  0.00035\nb.txt   1.30345      2.0");
-//! ```
 
 /// A value as pandas prints an object cell holding a float (precision 6).
 pub fn pandas_float(v: Option<f64>) -> String {
@@ -144,6 +134,22 @@ fn adjoin(lists: &[Vec<String>]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pandas_table_aligns_like_pandas() {
+        let t = pandas_table(
+            &["a.txt".into(), "b.txt".into()],
+            &["rmse".into(), "min".into()],
+            &[
+                vec![Some(0.008119), Some(0.00035)],
+                vec![Some(1.30345), Some(2.0)],
+            ],
+        );
+        assert_eq!(
+            t,
+            "           rmse      min\na.txt  0.008119  0.00035\nb.txt   1.30345      2.0"
+        );
+    }
 
     /// evo_res 1.38.1 (pandas 3.1) on two of evo's own zips, as printed.
     #[test]

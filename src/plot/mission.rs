@@ -322,3 +322,81 @@ fn speed_fit(
         estimate: profile(&aligned.times_s(t0_ns), &aligned.positions),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::align::clock_model::OffsetModel;
+    use crate::eval::config::{EvalConfig, NamedInput};
+    use crate::plot::FigureData;
+
+    /// The shared evidence (`$TRAJDRIFT_SHARED`, default `../shared`); `None` outside CI when it is
+    /// missing, a failure under CI.
+    fn shared() -> Option<std::path::PathBuf> {
+        let explicit = std::env::var("TRAJDRIFT_SHARED").ok();
+        let dir = explicit
+            .clone()
+            .map(std::path::PathBuf::from)
+            .unwrap_or_else(|| {
+                std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared")
+            });
+        if dir.join("fixtures").is_dir() {
+            return Some(dir);
+        }
+        assert!(
+            explicit.is_none() && std::env::var_os("CI").is_none(),
+            "shared data missing at {} (TRAJDRIFT_SHARED); CI must have it",
+            dir.display()
+        );
+        None
+    }
+
+    /// The first time of the aligned estimate's speed series in the mission's figures.
+    fn speed_figure_start(report: &Report, inputs: &crate::eval::inputs::Inputs) -> f64 {
+        let estimates = inputs.named_estimates();
+        let figures = mission_figures(
+            report,
+            &Trajectories {
+                reference: &inputs.reference.trajectory,
+                estimates: &estimates,
+            },
+        );
+        figures
+            .iter()
+            .find_map(|f| match &f.data {
+                FigureData::Speed(s) => s.estimate.first().map(|p| p.0),
+                _ => None,
+            })
+            .expect("a speed figure")
+    }
+
+    /// Under a piecewise model (the shared `clock_step` mission, whose clock steps by −0.5 s at
+    /// 200 s) the figures move the estimate by the model, not by the headline constant.
+    #[test]
+    fn figures_follow_a_piecewise_clock_model() {
+        let Some(shared) = shared() else {
+            return;
+        };
+        let dir = shared.join("fixtures/clock_step");
+        let c = EvalConfig::new(
+            Some(dir.join("mission.mcap")),
+            NamedInput::topic("/reference/position"),
+            vec![NamedInput::topic("/estimate/odom")],
+        );
+        let (report, inputs) = crate::eval::evaluate_with_inputs(&c, &|_| {}).unwrap();
+        let o = &report.estimates[0].time_offset;
+        assert_eq!(o.model, Some(OffsetModel::Piecewise), "{o:?}");
+        let first_segment = o.segments[0].offset_s;
+        // The same report with its model taken away: the figures then shift by the constant.
+        let mut constant = report.clone();
+        constant.estimates[0].time_offset.model = Some(OffsetModel::Constant);
+        let moved = speed_figure_start(&report, &inputs) - speed_figure_start(&constant, &inputs);
+        // The mission starts in the first segment: its offset, not the headline's, moved it.
+        assert!(
+            (moved - (first_segment - o.applied_s)).abs() < 1e-6,
+            "moved {moved} s; segments {:?}, applied {}",
+            o.segments,
+            o.applied_s
+        );
+    }
+}

@@ -39,7 +39,6 @@ pub enum FigureData {
     OffsetProfile(offset_profile::OffsetProfile),
     Speed(speed::SpeedFit),
     Sweep(sweep::SweepFigure),
-    DeDistribution(de_distribution::DeDistribution),
 }
 
 impl style::Draw for FigureData {
@@ -51,7 +50,6 @@ impl style::Draw for FigureData {
             FigureData::OffsetProfile(f) => f.draw(root),
             FigureData::Speed(f) => f.draw(root),
             FigureData::Sweep(f) => f.draw(root),
-            FigureData::DeDistribution(f) => f.draw(root),
         }
     }
 }

@@ -198,21 +198,6 @@ pub fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - 0.05 * span, hi + 0.05 * span)
 }
 
-/// A "no data" figure: the title and one line saying why, so a user never meets an empty file.
-pub struct Empty {
-    pub title: String,
-    pub why: String,
-}
-
-impl Draw for Empty {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
-        root.draw(&Text::new(self.title.clone(), (20, 20), title_font()))
-            .map_err(plot_err)?;
-        root.draw(&Text::new(self.why.clone(), (20, 60), label_font()))
-            .map_err(plot_err)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

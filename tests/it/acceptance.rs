@@ -7,9 +7,10 @@ use crate::common;
 use std::path::Path;
 
 use trajdrift::align::time_offset::OffsetMethod;
-use trajdrift::eval::config::{EvalConfig, NamedInput, Platform};
-use trajdrift::eval::evaluate;
+use trajdrift::evaluate;
+use trajdrift::params::Platform;
 use trajdrift::report::json::Report;
+use trajdrift::{EvalConfig, NamedInput};
 
 use common::{mission, shared, truth, MISSIONS};
 
@@ -26,7 +27,7 @@ fn eval(dir: &Path, reference: &str, estimate: &str, method: OffsetMethod) -> Re
     c.params.offset_method = Some(method);
     c.params.platform = Some(Platform::Wheeled);
     c.params.path_eps = Some(PATH_EPS_M);
-    evaluate(&c, &|_| {}).unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+    evaluate(&c).unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
 }
 
 #[test]
@@ -124,7 +125,7 @@ fn rigid_transform_of_the_estimate_changes_nothing() {
         c.params.platform = Some(Platform::Wheeled);
         c.params.path_eps = Some(PATH_EPS_M);
         c.params.window = Some(vec![5.0, 10.0]);
-        evaluate(&c, &|_| {}).unwrap()
+        evaluate(&c).unwrap()
     };
     // Random yaw and translation (fixed seeds keep the test reproducible).
     for (k, (yaw, tx, ty, tz)) in [

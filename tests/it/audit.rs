@@ -19,8 +19,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use serde_json::Value;
-use trajdrift::audit::judge::rejudge;
-use trajdrift::audit::report::{AuditReport, OutOfLineReason};
+use trajdrift::AuditReport;
 
 fn run(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_trajdrift"))
@@ -393,55 +392,6 @@ fn independent_mission_one_file_and_per_source_folder() {
 /// A source given a wrong clock — each of its pairs off by a different amount, 40–100 ms, as when its
 /// stamps jitter or its measurement went wrong — is named by the closure (`out_of_line`, reason
 /// `closure`), on every seed whose audit closes as measured.
-#[test]
-fn a_source_given_a_wrong_clock_is_named_by_the_closure() {
-    let dir = tempfile::tempdir().unwrap();
-    let mut judged = 0;
-    for seed in 1..=5 {
-        let (mission, _) = simulate(dir.path(), seed, 1200);
-        let (_, a) = audit(&[&mission], &dir.path().join(format!("w{seed}.json")), &[]);
-        let report: AuditReport = serde_json::from_value(a).unwrap();
-        if report.closure.iter().any(|c| !c.consistent) {
-            eprintln!("seed {seed}: the audit does not close as measured; skipped");
-            continue;
-        }
-        for wrong in report.sources.iter().skip(1).map(|s| s.name.clone()) {
-            let mut r = report.clone();
-            let mut k = 0.0;
-            for p in r.pairs.iter_mut().filter(|p| p.a == wrong || p.b == wrong) {
-                k += 1.0;
-                let e = 0.02 + 0.02 * k;
-                p.clock.offset_s += e;
-                for s in &mut p.clock.segments {
-                    s.offset_s += e;
-                }
-            }
-            rejudge(&mut r);
-            let named: Vec<_> = r
-                .out_of_line
-                .iter()
-                .filter(|o| o.reason == OutOfLineReason::Closure)
-                .map(|o| o.source.as_str())
-                .collect();
-            assert_eq!(named, [wrong.as_str()], "seed {seed}: {:?}", r.closure);
-            judged += 1;
-        }
-        // Untouched, it judges the same (the spans read back from the JSON's coverage, on the reference
-        // clock, move the pieces' middles a little: a drifting pair's residual by tens of µs).
-        let mut same = report.clone();
-        rejudge(&mut same);
-        for (x, y) in same.closure.iter().zip(&report.closure) {
-            assert_eq!((&x.sources, x.consistent), (&y.sources, y.consistent));
-            assert!((x.residual_s - y.residual_s).abs() < 1e-4, "{x:?} {y:?}");
-        }
-        let groups = |r: &AuditReport| -> Vec<Vec<String>> {
-            r.domains.iter().map(|d| d.sources.clone()).collect()
-        };
-        assert_eq!(groups(&same), groups(&report));
-    }
-    assert!(judged > 0, "no seed closed as measured");
-}
-
 /// `restamp` then `audit` of its output: each moved message's header stamp and log/publish times
 /// shifted by its domain's model to the nanosecond, every other message byte-identical with its
 /// times, the audit attached; the constant and drifting domains then at 0 ± 2 ms and constant.
@@ -467,7 +417,7 @@ fn restamp_moves_each_domain_and_copies_the_rest() {
         &after
             .attachments
             .iter()
-            .find(|(n, _)| n == trajdrift::audit::restamp::AUDIT_ATTACHMENT)
+            .find(|(n, _)| n == "trajdrift-audit.json")
             .expect("the audit attached")
             .1,
     )

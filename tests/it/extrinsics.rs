@@ -5,8 +5,8 @@
 use crate::common;
 use trajdrift::align::time_offset::OffsetMethod;
 
-use trajdrift::eval::config::{EvalConfig, NamedInput};
-use trajdrift::eval::evaluate;
+use trajdrift::evaluate;
+use trajdrift::{EvalConfig, NamedInput};
 
 fn lever(truth: &serde_json::Value, side: &str) -> [f64; 3] {
     let v = &truth["lever_arms"][side];
@@ -53,7 +53,7 @@ fn true_levers_put_both_curvature_methods_within_25_ms() {
         }
         c.estimate_levers = vec![(None, lever(&truth, "estimate").into())];
         c.reference_lever = Some(lever(&truth, "reference").into());
-        let report = evaluate(&c, &|_| {}).unwrap();
+        let report = evaluate(&c).unwrap();
         let est = &report.estimates[0];
         let offset = |method: OffsetMethod| {
             est.time_offset
@@ -92,7 +92,7 @@ fn moving_a_position_only_trajectory_is_refused() {
         "/reference/position",
     );
     c.estimate_levers = vec![(None, [0.2, 0.0, 0.3].into())];
-    let e = evaluate(&c, &|_| {}).unwrap_err().to_string();
+    let e = evaluate(&c).unwrap_err().to_string();
     assert_eq!(e.lines().count(), 1, "{e}");
     assert!(
         e.contains("/reference/position") && e.contains("position-only"),

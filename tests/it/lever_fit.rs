@@ -7,11 +7,11 @@ use crate::common;
 use std::path::Path;
 
 use trajdrift::align::time_offset::OffsetMethod;
-use trajdrift::eval::config::{EvalConfig, NamedInput};
-use trajdrift::eval::evaluate;
+use trajdrift::evaluate;
 use trajdrift::metrics::lever::LeverCorrection;
 use trajdrift::report::json::{DriftErrorReport, Report};
 use trajdrift::sources::tum::read_tum;
+use trajdrift::{EvalConfig, NamedInput};
 
 use common::{mission, shared, truth, MISSIONS};
 
@@ -29,7 +29,7 @@ fn config(dir: &Path, correction: LeverCorrection, offset_s: Option<f64>) -> Eva
 }
 
 fn run(c: &EvalConfig) -> Report {
-    evaluate(c, &|_| {}).unwrap_or_else(|e| panic!("{e}"))
+    evaluate(c).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn de5(r: &Report) -> &DriftErrorReport {

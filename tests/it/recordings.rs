@@ -7,10 +7,11 @@ use std::path::{Path, PathBuf};
 
 use trajdrift::decode::ros1;
 use trajdrift::decode::ros2_msgs::{Header, Odometry, Point, PointStamped, PoseStamped, Time};
-use trajdrift::eval::config::{EvalConfig, NamedInput, Platform};
-use trajdrift::eval::evaluate;
+use trajdrift::evaluate;
+use trajdrift::params::Platform;
 use trajdrift::sources::bag::writer::{BagCompression, BagWriter};
 use trajdrift::sources::{open, ExtractOptions, Extraction};
+use trajdrift::{EvalConfig, NamedInput};
 
 use common::{mission, shared, MISSIONS};
 
@@ -83,7 +84,7 @@ fn every_form_of_a_mission_gives_the_same_eval() {
                 vec![NamedInput::topic("/estimate/odom")],
             );
             c.params.platform = Some(Platform::Wheeled);
-            let r = evaluate(&c, &|_| {}).unwrap_or_else(|e| panic!("{e}"));
+            let r = evaluate(&c).unwrap_or_else(|e| panic!("{e}"));
             serde_json::to_value((&r.reference, &r.estimates, &r.warnings)).unwrap()
         };
         let base = run(dir.join("mission.mcap"));

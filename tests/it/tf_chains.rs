@@ -10,11 +10,11 @@ use std::process::Command;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
 use trajdrift::decode::cdr::encode_le;
 use trajdrift::decode::ros2_msgs::{PointStamped, TFMessage, Time, TransformStamped};
-use trajdrift::eval::config::{EvalConfig, LeverSpec, NamedInput};
-use trajdrift::eval::evaluate;
+use trajdrift::evaluate;
 use trajdrift::simulate::{default_route, simulate, MissionConfig};
 use trajdrift::sources::{open, ExtractOptions, Extraction};
 use trajdrift::trajectory::Trajectory;
+use trajdrift::{EvalConfig, LeverSpec, NamedInput};
 
 fn extract(path: &Path, topics: &[&str], options: &ExtractOptions) -> Extraction {
     let topics: Vec<String> = topics.iter().map(|t| t.to_string()).collect();
@@ -384,16 +384,13 @@ fn lever_config(rec: &Path, lever: LeverSpec) -> EvalConfig {
 fn tf_static_lever_equals_the_numbers() {
     let dir = tempfile::tempdir().unwrap();
     let (rec, lever) = lever_recording(dir.path());
-    let by_frame = evaluate(
-        &lever_config(
-            &rec,
-            LeverSpec::TfStatic {
-                body: None,
-                frame: "gnss".into(),
-            },
-        ),
-        &|_| {},
-    )
+    let by_frame = evaluate(&lever_config(
+        &rec,
+        LeverSpec::TfStatic {
+            body: None,
+            frame: "gnss".into(),
+        },
+    ))
     .unwrap_or_else(|e| panic!("{e}"));
     let x = by_frame.estimates[0].extrinsics.clone().unwrap();
     for k in 0..3 {
@@ -403,7 +400,7 @@ fn tf_static_lever_equals_the_numbers() {
         );
     }
     let resolved = LeverSpec::Offset(x.reference_lever_m);
-    let by_numbers = evaluate(&lever_config(&rec, resolved), &|_| {}).unwrap();
+    let by_numbers = evaluate(&lever_config(&rec, resolved)).unwrap();
     assert_eq!(
         serde_json::to_value(&by_frame.estimates).unwrap(),
         serde_json::to_value(&by_numbers.estimates).unwrap()
@@ -414,7 +411,7 @@ fn tf_static_lever_equals_the_numbers() {
     let err = |spec: LeverSpec, estimate: &str| {
         let mut c = lever_config(&rec, spec);
         c.estimates = vec![NamedInput::topic(estimate)];
-        evaluate(&c, &|_| {}).unwrap_err().to_string()
+        evaluate(&c).unwrap_err().to_string()
     };
     let e = err(
         LeverSpec::parse("--reference-lever", "tf-static:radar").unwrap(),
@@ -436,7 +433,7 @@ fn tf_static_lever_equals_the_numbers() {
         LeverSpec::parse("--reference-lever", "tf-static:gnss").unwrap(),
     );
     c.estimates = vec![NamedInput::topic("est=/reference/position")];
-    let e = evaluate(&c, &|_| {}).unwrap_err().to_string();
+    let e = evaluate(&c).unwrap_err().to_string();
     assert!(e.contains("write tf-static:BODY:gnss"), "{e}");
 
     // The same from the command line; a malformed spec is a usage error (exit 2).

@@ -6,8 +6,8 @@
 
 use crate::common;
 
-use trajdrift::eval::config::{EvalConfig, NamedInput};
-use trajdrift::eval::evaluate;
+use trajdrift::evaluate;
+use trajdrift::{EvalConfig, NamedInput};
 
 /// Mission, applied Δt (s), DE RMSE at 5 m, from the direct search.
 const BEFORE: [(&str, f64, f64); 7] = [
@@ -31,7 +31,7 @@ fn shared_missions_give_the_direct_searchs_answers() {
             NamedInput::topic("/reference/position"),
             vec![NamedInput::topic("/estimate/odom")],
         );
-        let report = evaluate(&config, &|_| {}).unwrap();
+        let report = evaluate(&config).unwrap();
         let e = &report.estimates[0];
         let (got_dt, got_de) = (e.time_offset.applied_s, e.drift_error[0].rmse.unwrap());
         println!(

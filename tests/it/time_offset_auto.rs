@@ -12,11 +12,11 @@ use trajdrift::align::curvature::CurvatureParams;
 use trajdrift::align::time_offset::{
     estimate_time_offset, OffsetMethod, OffsetParams, OffsetStatus,
 };
-use trajdrift::eval::config::{EvalConfig, NamedInput};
-use trajdrift::eval::evaluate;
+use trajdrift::evaluate;
 use trajdrift::report::json::Report;
 use trajdrift::simulate::motion::Segment;
 use trajdrift::simulate::{default_route, simulate, Mission, MissionConfig};
+use trajdrift::{EvalConfig, NamedInput};
 
 use common::{load, mission, shared, truth, MISSIONS};
 
@@ -72,7 +72,7 @@ fn eval_defaults(dir: &std::path::Path) -> Report {
         NamedInput::topic("/reference/position"),
         vec![NamedInput::topic("/estimate/odom")],
     );
-    evaluate(&c, &|_| {}).unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+    evaluate(&c).unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
 }
 
 #[test]

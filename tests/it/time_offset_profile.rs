@@ -9,11 +9,11 @@ use trajdrift::align::auto_offset::auto_time_offset;
 use trajdrift::align::clock_model::{clock_model, ClockModel, OffsetModel};
 use trajdrift::align::offset_profile::{OffsetProfile, ProfileParams};
 use trajdrift::align::time_offset::{estimate_time_offset, OffsetMethod, OffsetParams};
-use trajdrift::eval::config::{EvalConfig, NamedInput};
-use trajdrift::eval::evaluate;
+use trajdrift::evaluate;
 use trajdrift::report::json::Report;
 use trajdrift::simulate::motion::Segment;
 use trajdrift::simulate::{default_route, simulate, ClockStep, Mission, MissionConfig};
+use trajdrift::{EvalConfig, NamedInput};
 
 /// Times in seconds from the mission start (reference clock for the reference, the estimate's own
 /// clock for the estimate) and positions.
@@ -157,7 +157,7 @@ fn eval_mcap(path: &std::path::Path, reference: &str, estimate: &str) -> Report 
         NamedInput::topic(reference),
         vec![NamedInput::topic(estimate)],
     );
-    evaluate(&c, &|_| {}).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    evaluate(&c).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 fn print_report(name: &str, rep: &Report) {
@@ -530,7 +530,7 @@ fn real_recordings_are_constant() {
         topics("nav2_turtlebot.mcap", "/tf:map:base_footprint", &["/odom"]),
     ];
     for (name, c) in cases {
-        let rep = evaluate(&c, &|_| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let rep = evaluate(&c).unwrap_or_else(|e| panic!("{name}: {e}"));
         for e in &rep.estimates {
             let o = &e.time_offset;
             println!(

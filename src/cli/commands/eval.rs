@@ -125,7 +125,7 @@ pub fn run(a: EvalArgs) -> Result<u8> {
             JobEvent::Read { bytes, .. } => bar
                 .get_or_insert_with(|| ReadProgress::new(total, a.quiet))
                 .update(bytes),
-            JobEvent::PassDone(_) => {
+            JobEvent::PassDone => {
                 if let Some(b) = bar.take() {
                     b.finish();
                 }

@@ -5,12 +5,12 @@
 //! [`ros2_schemas`] holds the schema texts needed to write MCAP files.
 
 pub mod cdr;
-pub mod geodesy;
+pub(crate) mod geodesy;
 pub mod ros1;
 pub mod ros2_msgs;
-pub mod ros2_prefix;
+pub(crate) mod ros2_prefix;
 pub mod ros2_schemas;
-pub mod sample;
+pub(crate) mod sample;
 pub mod tf;
 
 pub use sample::{

@@ -52,7 +52,8 @@ pub struct StampedPose {
 #[derive(Debug, Clone, Copy, Deserialize)]
 pub struct OdometryPose {
     pub header: Stamp,
-    pub child_frame_id: Skipped,
+    /// Read past, not kept (CDR is positional).
+    pub _child_frame_id: Skipped,
     pub pose: Pose,
 }
 
@@ -67,6 +68,7 @@ pub struct StampedPoint {
 #[derive(Debug, Clone, Copy, Deserialize)]
 pub struct StampedTransform {
     pub header: Stamp,
-    pub child_frame_id: Skipped,
+    /// Read past, not kept (CDR is positional).
+    pub _child_frame_id: Skipped,
     pub transform: Transform,
 }

@@ -14,20 +14,6 @@
 
 use nalgebra::Vector3;
 
-/// Indices of the samples an ε-decimation keeps: the first sample, then every sample at least `eps_m`
-/// from the last kept one.
-pub fn decimate_indices(positions: &[Vector3<f64>], eps_m: f64) -> Vec<usize> {
-    let mut kept = Vec::new();
-    let mut last: Option<Vector3<f64>> = None;
-    for (i, p) in positions.iter().enumerate() {
-        if last.is_none_or(|l| (p - l).norm() >= eps_m) {
-            kept.push(i);
-            last = Some(*p);
-        }
-    }
-    kept
-}
-
 /// The position of a trajectory at time `t`, linear between the two samples around it (clamped to the
 /// first or last sample outside the time range). `times` must be increasing and non-empty.
 pub fn interpolate_position(times: &[f64], positions: &[Vector3<f64>], t: f64) -> Vector3<f64> {
@@ -50,8 +36,8 @@ pub(crate) fn in_intervals(intervals: &[[f64; 2]], t: f64) -> bool {
     k < intervals.len() && intervals[k][0] <= t
 }
 
-/// A trajectory's ε-decimated polyline with its cumulative counted length. Unlike
-/// [`decimate_indices`], the last sample is always a vertex.
+/// A trajectory's ε-decimated polyline with its cumulative counted length. The first sample, then every sample at
+/// least ε from the last kept one; the last sample is always a vertex.
 #[derive(Debug, Clone)]
 pub struct DecimatedPath<'a> {
     raw_t: &'a [f64],
@@ -193,13 +179,6 @@ mod tests {
         (0..n)
             .map(|i| (i as f64 * 0.1, Vector3::new(i as f64 * step, 0.0, 0.0)))
             .unzip()
-    }
-
-    #[test]
-    fn keeps_samples_eps_apart() {
-        let (_, p) = line(11, 0.1);
-        assert_eq!(decimate_indices(&p, 0.25), vec![0, 3, 6, 9]);
-        assert_eq!(decimate_indices(&p, 0.0).len(), 11);
     }
 
     #[test]

@@ -23,7 +23,7 @@
 //!   it was; a run killed outright leaves one that the next writer of the folder removes, recognised
 //!   by the lock nobody holds.
 
-pub mod atomic;
+pub(crate) mod atomic;
 pub mod lock;
 pub mod names;
 

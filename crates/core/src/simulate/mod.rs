@@ -6,7 +6,7 @@
 
 pub mod grandtour;
 pub mod motion;
-pub mod ros1_definitions;
+pub(crate) mod ros1_definitions;
 pub mod sources;
 pub mod writer;
 

@@ -5,13 +5,13 @@
 //! Eval, annotate and batch never care where samples came from.
 
 pub mod bag;
-pub mod extract;
+pub(crate) mod extract;
 pub mod input;
 pub mod mcap;
 pub mod mission;
 pub mod open;
 pub mod recording;
-pub mod rosbag2;
+pub(crate) mod rosbag2;
 pub mod tum;
 
 pub use open::{open, open_all};

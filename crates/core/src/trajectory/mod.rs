@@ -6,7 +6,7 @@
 
 pub mod extrinsics;
 pub mod rows;
-pub mod tf_compose;
+pub(crate) mod tf_compose;
 
 use nalgebra::{UnitQuaternion, Vector3};
 

@@ -4,14 +4,14 @@
 //! index for KITTI paths), align the estimate, project to a plane, compute the per-pair errors, summarise.
 //! See `docs/standard-metrics.md` for the conventions and the evo flag → trajdrift flag table.
 
-pub mod ape;
+pub(crate) mod ape;
 pub mod associate;
 pub mod filters;
 pub mod in_eval;
-pub mod kitti_drift;
+pub(crate) mod kitti_drift;
 pub mod poses;
-pub mod relation;
-pub mod rpe;
+pub(crate) mod relation;
+pub(crate) mod rpe;
 pub mod umeyama;
 
 use nalgebra::{Matrix3, Vector3};

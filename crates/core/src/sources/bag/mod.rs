@@ -4,7 +4,7 @@
 //! into channels (`ros1` messages, `ros1msg` schemas) and hands messages to the shared extraction
 //! ([`crate::sources::extract`]). [`writer`] writes small bags for tests and benchmarks.
 
-pub mod records;
+pub(crate) mod records;
 pub mod writer;
 
 use std::collections::HashMap;

@@ -19,7 +19,7 @@ use crate::error::{Error, Result};
 pub const MAGIC: &[u8; 13] = b"#ROSBAG V2.0\n";
 
 /// Record op codes.
-pub mod op {
+pub(crate) mod op {
     pub const MESSAGE_DATA: u8 = 0x02;
     pub const BAG_HEADER: u8 = 0x03;
     pub const INDEX_DATA: u8 = 0x04;

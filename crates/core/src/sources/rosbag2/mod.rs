@@ -5,9 +5,9 @@
 //! every split file); the files are read one after the other in one pass: MCAP files through the
 //! MCAP stream, `.db3` files through [`sqlite`].
 
-pub mod metadata;
-pub mod schemas;
-pub mod sqlite;
+pub(crate) mod metadata;
+pub(crate) mod schemas;
+pub(crate) mod sqlite;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -105,16 +105,6 @@ impl Rosbag2Source {
             counts,
             size,
         })
-    }
-
-    /// The storage plugin.
-    pub fn storage(&self) -> Storage {
-        self.storage
-    }
-
-    /// The split files, in order.
-    pub fn files(&self) -> &[PathBuf] {
-        &self.files
     }
 }
 
