@@ -8,8 +8,8 @@
 //!
 //! How: every function is a thin door onto the code the command line runs, so a number from here is the
 //! command line's number. [`read`] is the evaluation's input pass (one streaming pass over a recording,
-//! the text readers for files); [`evaluate`] is `trajdrift eval`'s job ([`crate::job::run`], its roles
-//! resolved by [`crate::eval::roles`]); [`evaluate_trajectories`],
+//! the text readers for files); [`evaluate`] is `trajdrift eval`'s job (`job::run`, its roles
+//! resolved by `eval::roles`); [`evaluate_trajectories`],
 //! [`time_offset`] and [`drift_error`] are the same evaluation job on trajectories in memory; [`ape`]
 //! and [`rpe`] are the core's evo-exact metrics (`trajdrift ape`/`rpe`). Nothing here prints, draws a
 //! progress bar or writes a file.

@@ -25,7 +25,7 @@ pub const AUDIT_SCHEMA_VERSION: u32 = 1;
 /// The whole audit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AuditReport {
-    /// Always [`AUDIT_KIND`].
+    /// Always `AUDIT_KIND` (`trajdrift.audit`).
     pub kind: String,
     pub schema_version: u32,
     pub tool: Tool,

@@ -1,4 +1,7 @@
 //! Every command-line flag, in one place (clap derive).
+// The flags' doc comments are their `--help` text, written for a terminal (`<mission>`, `[,scale]`),
+// not for rustdoc.
+#![allow(rustdoc::invalid_html_tags, rustdoc::broken_intra_doc_links)]
 
 use std::path::PathBuf;
 

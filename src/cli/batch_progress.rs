@@ -10,7 +10,7 @@ use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 
 use trajdrift::batch::run::BatchEvent;
 
-/// Draws [`BatchEvent`]s; safe to call from every worker thread.
+/// Draws `BatchEvent`s; safe to call from every worker thread.
 pub struct BatchBars {
     multi: Option<MultiProgress>,
     overall: Option<ProgressBar>,

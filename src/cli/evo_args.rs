@@ -3,6 +3,9 @@
 //! (`trajdrift traj`), spelled as evo 1.38.1 spells them (`tests/data/evo-1.38.1-flags.tsv` lists them,
 //! read from evo's own parsers). A flag with no meaning here is accepted and named once on stderr
 //! ([`ignored_notes`]).
+// The flags' doc comments are their `--help` text, written for a terminal (`<mission>`, `[,scale]`),
+// not for rustdoc.
+#![allow(rustdoc::invalid_html_tags, rustdoc::broken_intra_doc_links)]
 
 use std::path::PathBuf;
 

@@ -158,7 +158,7 @@ pub struct EvalConfig {
     /// given or with a platform. Not a parameter: `dt_max` stays the bound on gaps and standstills.
     pub curvature_dt_max_s: Option<f64>,
     /// `--export-aligned FILE`: write each estimate, shifted onto the reference clock, as TUM
-    /// (see [`super::export::aligned_path`] for the names with several estimates).
+    /// (see `eval::export::aligned_path` for the names with several estimates).
     pub export_aligned: Option<PathBuf>,
     /// How `TrajectoryInput::TumFile` inputs are read: every text format (TUM, KITTI, EuRoC, CSV), picked
     /// per file unless forced.

@@ -22,8 +22,6 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::{Error, Result};
-/// The one file-safe mapping of a name (see [`crate::output::names`]).
-pub use crate::output::names::file_stem;
 use crate::output::names::file_stems;
 use crate::output::write_output;
 use crate::trajectory::Trajectory;

@@ -478,7 +478,7 @@ impl EvoOutputs<'_> {
                 std::path::PathBuf::from(format!(
                     "{}_{}",
                     self.result.metric,
-                    trajdrift::plot::file_stem(&short)
+                    trajdrift::output::names::file_stem(&short)
                 ))
             },
             |r| r.with_extension(""),
@@ -578,7 +578,7 @@ pub fn write_figures(
     Ok(substituted)
 }
 
-/// evo's printout: the title (evo's words, [`evo_title`]), then the statistics sorted by name, six
+/// evo's printout: the title (evo's words, `evo_title`), then the statistics sorted by name, six
 /// decimals.
 pub fn render(r: &MetricResult, relation: PoseRelation, p: &Pipeline) -> String {
     let mut s = evo_title(r, relation, p);

@@ -384,7 +384,7 @@ fn info_csv(all: &[&TrajInput]) -> String {
 
 /// A trajectory's file stem (its name, `/` replaced).
 fn stem(t: &TrajInput) -> String {
-    trajdrift::plot::file_stem(&t.name.replace('/', "_"))
+    trajdrift::output::names::file_stem(&t.name.replace('/', "_"))
 }
 
 /// Conversions: NAME.tum / NAME.kitti in the current folder, and one MCAP for all
