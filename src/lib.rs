@@ -79,3 +79,4 @@ mod job;
 mod plot;
 mod render;
 mod standard;
+pub mod validate;

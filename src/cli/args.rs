@@ -73,6 +73,10 @@ pub enum Command {
     /// (`trajdrift traj tum a.txt b.txt --ref gt.txt -a -p --save_as_kitti`).
     #[command(after_help = help::TRAJ)]
     Traj(Box<crate::cli::evo_args::TrajArgs>),
+    /// How far to trust the time alignment: simulated missions of every kind evaluated with the
+    /// defaults and graded against their truth (the calibration table).
+    #[command(after_help = help::VALIDATE)]
+    Validate(Box<ValidateArgs>),
     /// Write the manual (roff) to stdout, or one page per command into a folder.
     #[command(after_help = help::MAN)]
     Man(ManArgs),
@@ -195,6 +199,12 @@ Examples:
   trajdrift traj tum est.txt --ref gt.txt -a -p --save_plot traj.svg --plot_mode xy
   trajdrift traj tum gt.txt est.txt --full_check      # evo_traj's checks, with counts
   trajdrift traj mcap mission.mcap /odom --save_as_tum   # topics to TUM; --save_as_mcap for MCAP";
+
+    pub const VALIDATE: &str = "\
+Examples:
+  trajdrift validate                              # 10 missions of every kind: the calibration table
+  trajdrift validate --missions 50 --kind legged,step --json grades.json
+  trajdrift validate --missions 3 --seed 100      # other seeds, a quick look";
 
     pub const MAN: &str = "\
 Examples:
@@ -768,4 +778,21 @@ pub struct OffsetArgs {
     /// The spatial method searches Δt in ±S seconds.
     #[arg(long, value_name = "S", default_value_t = 5.0)]
     pub spatial_range: f64,
+}
+
+#[derive(Debug, Args)]
+pub struct ValidateArgs {
+    /// Missions of each kind.
+    #[arg(long, value_name = "N", default_value_t = 10)]
+    pub missions: usize,
+    /// Only these kinds (comma-separated): ground, legged, near_straight, turns_in_place,
+    /// gnss_outages, receipt_stamps, position_jumps, drift, short_drift, step.
+    #[arg(long, value_name = "KIND,...", value_delimiter = ',')]
+    pub kind: Vec<trajdrift::simulate::scenario::MissionKind>,
+    /// The first seed (mission i of a kind has seed S + i).
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// Write every mission's grade as JSON to FILE (`-` = stdout).
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
 }

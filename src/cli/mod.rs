@@ -51,6 +51,7 @@ pub fn run(cli: args::Cli) -> u8 {
         args::Command::Completions(a) => commands::completions::run(a),
         args::Command::Res(a) => commands::res::run(*a),
         args::Command::Traj(a) => commands::traj::run(*a),
+        args::Command::Validate(a) => commands::validate::run(*a),
     };
     match result {
         Ok(code) => code,

@@ -17,3 +17,4 @@ pub mod simulate;
 pub mod sweep;
 pub mod topics;
 pub mod traj;
+pub mod validate;

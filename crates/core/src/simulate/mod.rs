@@ -7,6 +7,7 @@
 pub mod grandtour;
 pub mod motion;
 pub(crate) mod ros1_definitions;
+pub mod scenario;
 pub mod sources;
 pub mod writer;
 

@@ -1,0 +1,739 @@
+//! Varied missions for validation: every kind of mission the time alignment must handle, drawn from a
+//! seed, with the truth to grade the answer against.
+//!
+//! [`crate::simulate::simulate`] writes the project's fixtures: one planar route, one lever arm, a
+//! 1 kHz body without attitude. A tool whose error bars are to mean something must be graded on more
+//! than that, so this module draws a mission of a named [`MissionKind`] from a seed:
+//!
+//! - **the body**: a wheeled robot (0.8–2 m/s, gentle curves) or a legged one (0.25–0.5 m/s, tight
+//!   turns, a trotting gait: lateral sway, vertical bob, roll and pitch at 1.5–2.5 Hz while it moves),
+//!   driving stops, straights, arcs and S-curves with bounded acceleration and yaw acceleration,
+//!   optionally turning in place, over rolling terrain that tilts the body;
+//! - **the sensors**: a reference (GNSS, prism) at 1–20 Hz with white noise and a slow correlated error,
+//!   and an estimate (odometry) at 10–200 Hz, each at its own 3-D lever arm in the body frame
+//!   (vertical levers included), so that every roll, pitch and turn in place moves them apart;
+//! - **the estimate's errors**: a distance scale error, a heading random walk (its positions drift as
+//!   integrated odometry does), white position and attitude noise, and optionally position jumps (a
+//!   localiser correcting itself: not clock events);
+//! - **the clocks**: a constant offset, a rate error (ppm), or a step; stamps taken at receipt (a
+//!   latency with exponential jitter on each stream) where the kind says so; GNSS outages.
+//!
+//! Every random choice comes from one ChaCha8 stream seeded by `seed`, so a mission is reproduced from
+//! its kind and seed alone. The truth is the offset function Δt(t) ([`Scenario::offset_at`]): the
+//! estimate's stamps plus Δt(t) give the reference clock at reference time t, the mean receipt
+//! latencies included (a constant latency is part of the offset a user must apply).
+
+use nalgebra::{Rotation3, UnitQuaternion, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Exp, StandardNormal};
+
+use crate::simulate::ClockStep;
+use crate::trajectory::Trajectory;
+
+/// What a validation mission exercises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MissionKind {
+    /// A wheeled robot, levers up to 0.5 m (vertical ones included), constant clock.
+    Ground,
+    /// A legged robot with a trotting gait and a lever (often the sensor ahead of and above the
+    /// reference point), constant clock.
+    Legged,
+    /// A wheeled robot driving nearly straight: the curvature cannot tell, the speed changes can.
+    NearStraight,
+    /// A legged robot that turns in place: the reference point stands while a sensor at a lever
+    /// sweeps an arc.
+    TurnsInPlace,
+    /// GNSS outages of 5–20 s in the reference.
+    GnssOutages,
+    /// Both streams stamped at receipt: a latency with exponential jitter on each.
+    ReceiptStamps,
+    /// The estimate's position jumps (a localiser correcting itself) two or three times.
+    PositionJumps,
+    /// A 15–25-minute mission (wheeled or legged) whose estimate clock runs ±40…150 ppm off.
+    Drift,
+    /// A 5-minute mission whose estimate clock runs 50 ppm off (about what the data resolve).
+    ShortDrift,
+    /// The estimate's clock steps by 0.1–1 s once, in the middle half of an 8–12-minute mission.
+    Step,
+}
+
+impl MissionKind {
+    /// Every kind, in the order the validation table lists them.
+    pub const ALL: [MissionKind; 10] = [
+        MissionKind::Ground,
+        MissionKind::Legged,
+        MissionKind::NearStraight,
+        MissionKind::TurnsInPlace,
+        MissionKind::GnssOutages,
+        MissionKind::ReceiptStamps,
+        MissionKind::PositionJumps,
+        MissionKind::Drift,
+        MissionKind::ShortDrift,
+        MissionKind::Step,
+    ];
+
+    /// The name as on the command line and in tables.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MissionKind::Ground => "ground",
+            MissionKind::Legged => "legged",
+            MissionKind::NearStraight => "near_straight",
+            MissionKind::TurnsInPlace => "turns_in_place",
+            MissionKind::GnssOutages => "gnss_outages",
+            MissionKind::ReceiptStamps => "receipt_stamps",
+            MissionKind::PositionJumps => "position_jumps",
+            MissionKind::Drift => "drift",
+            MissionKind::ShortDrift => "short_drift",
+            MissionKind::Step => "step",
+        }
+    }
+
+    /// Whether the kind's clock is one constant offset.
+    pub fn constant_clock(self) -> bool {
+        !matches!(
+            self,
+            MissionKind::Drift | MissionKind::ShortDrift | MissionKind::Step
+        )
+    }
+}
+
+impl std::str::FromStr for MissionKind {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        MissionKind::ALL
+            .iter()
+            .copied()
+            .find(|k| k.as_str() == s.replace('-', "_"))
+            .ok_or_else(|| {
+                let names: Vec<&str> = MissionKind::ALL.iter().map(|k| k.as_str()).collect();
+                format!(
+                    "unknown mission kind `{s}`; expected one of {}",
+                    names.join(", ")
+                )
+            })
+    }
+}
+
+/// One leg of a route: driven at a target speed and curvature, or (speed 0, `spin_rps` ≠ 0) a turn
+/// in place.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Leg {
+    pub duration_s: f64,
+    pub speed_mps: f64,
+    /// Path curvature, 1/m (positive: left).
+    pub curvature: f64,
+    /// Yaw rate of a turn in place, rad/s (used when the speed is 0).
+    pub spin_rps: f64,
+}
+
+/// A legged robot's gait, while it moves.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Gait {
+    pub frequency_hz: f64,
+    /// Lateral sway amplitude, metres.
+    pub sway_m: f64,
+    /// Vertical bob amplitude (at twice the frequency), metres.
+    pub bob_m: f64,
+    /// Roll amplitude, radians.
+    pub roll_rad: f64,
+    /// Pitch amplitude (at twice the frequency), radians.
+    pub pitch_rad: f64,
+}
+
+/// Everything that defines a validation mission (drawn by [`Scenario::draw`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Scenario {
+    pub kind: MissionKind,
+    pub seed: u64,
+    pub legged: bool,
+    pub route: Vec<Leg>,
+    pub gait: Option<Gait>,
+    /// Amplitude of the rolling terrain, metres (slopes of a few degrees).
+    pub terrain_m: f64,
+    pub ref_rate_hz: f64,
+    pub est_rate_hz: f64,
+    /// White noise per reference coordinate, metres.
+    pub ref_noise_m: f64,
+    /// A slow (Gauss–Markov, 30 s) error per reference coordinate, metres.
+    pub ref_slow_noise_m: f64,
+    /// White noise per estimate coordinate, metres; attitude noise, radians.
+    pub est_noise_m: f64,
+    pub est_attitude_noise_rad: f64,
+    /// Sensor positions in the body frame (x forward, y left, z up), metres.
+    pub ref_lever_m: [f64; 3],
+    pub est_lever_m: [f64; 3],
+    /// Δt at the start: estimate stamps + Δt = reference clock.
+    pub time_offset_s: f64,
+    /// The estimate clock's rate error, ppm (positive: it runs fast, Δt falls).
+    pub clock_drift_ppm: f64,
+    pub clock_step: Option<ClockStep>,
+    /// The estimate's distance scale error (0.02: 2 % long).
+    pub scale_error: f64,
+    /// The estimate's heading random walk, degrees per √s.
+    pub yaw_walk_deg_per_sqrt_s: f64,
+    /// Reference outages, true seconds from the start.
+    pub outages: Vec<(f64, f64)>,
+    /// Receipt stamps: mean latency of the reference's and of the estimate's stamps (exponential), s.
+    pub receipt_latency_s: Option<(f64, f64)>,
+    /// Position jumps of the estimate: (true time, jump in its frame, metres).
+    pub jumps: Vec<(f64, [f64; 3])>,
+}
+
+/// A drawn mission: the scenario, what the sensors published, and how long it lasted.
+#[derive(Debug, Clone)]
+pub struct ScenarioMission {
+    pub scenario: Scenario,
+    /// Reference positions (world ENU), stamped on the reference clock (ns since the epoch).
+    pub reference: Trajectory,
+    /// Estimate poses in its own frame, stamped on its own clock.
+    pub estimate: Trajectory,
+    pub duration_s: f64,
+}
+
+/// Stamp of the first sample, ns since the epoch.
+pub const START_NS: i64 = 1_718_460_000_000_000_000;
+
+/// Rate of the body's integration, Hz.
+const BODY_RATE_HZ: f64 = 1000.0;
+
+fn uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * rng.random::<f64>()
+}
+
+fn pick<T: Copy>(rng: &mut ChaCha8Rng, v: &[T]) -> T {
+    v[rng.random_range(0..v.len())]
+}
+
+fn signed(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
+    let m = uniform(rng, lo, hi);
+    if rng.random::<bool>() {
+        m
+    } else {
+        -m
+    }
+}
+
+impl Scenario {
+    /// The mission of `kind` drawn from `seed` (see the module doc for the ranges).
+    pub fn draw(kind: MissionKind, seed: u64) -> Scenario {
+        // The kind enters the stream too: seed 3 of two kinds are unrelated missions.
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ ((kind as u64 + 1) << 40));
+        let legged = match kind {
+            MissionKind::Legged | MissionKind::TurnsInPlace => true,
+            MissionKind::Drift | MissionKind::ShortDrift | MissionKind::Step => seed % 2 == 1,
+            MissionKind::NearStraight => false,
+            _ => rng.random::<f64>() < 0.3,
+        };
+        let duration_s = match kind {
+            MissionKind::Drift => uniform(&mut rng, 900.0, 1500.0),
+            MissionKind::ShortDrift => 300.0,
+            MissionKind::Step => uniform(&mut rng, 480.0, 720.0),
+            _ => uniform(&mut rng, 180.0, 480.0),
+        };
+        let spins = match kind {
+            MissionKind::TurnsInPlace => 0.25,
+            _ if legged => 0.05,
+            _ => 0.0,
+        };
+        let route = draw_route(&mut rng, legged, kind, spins, duration_s);
+        let gait = legged.then(|| Gait {
+            frequency_hz: uniform(&mut rng, 1.5, 2.5),
+            sway_m: uniform(&mut rng, 0.005, 0.02),
+            bob_m: uniform(&mut rng, 0.003, 0.008),
+            roll_rad: uniform(&mut rng, 0.5, 2.0).to_radians(),
+            pitch_rad: uniform(&mut rng, 0.3, 1.5).to_radians(),
+        });
+        let ref_rate_hz = if legged {
+            pick(&mut rng, &[5.0, 10.0, 10.0, 20.0, 20.0])
+        } else {
+            pick(&mut rng, &[1.0, 2.0, 5.0, 10.0, 10.0, 20.0])
+        };
+        let est_rate_hz = pick(&mut rng, &[10.0, 20.0, 50.0, 100.0, 200.0]);
+        let est_lever_m = if legged {
+            if rng.random::<f64>() < 0.35 {
+                // The mounting of the false step: 0.2 m ahead, 0.3 m above.
+                [0.2, 0.0, 0.3]
+            } else {
+                [
+                    uniform(&mut rng, -0.3, 0.3),
+                    uniform(&mut rng, -0.2, 0.2),
+                    uniform(&mut rng, 0.0, 0.4),
+                ]
+            }
+        } else {
+            [
+                uniform(&mut rng, -0.5, 0.5),
+                uniform(&mut rng, -0.5, 0.5),
+                uniform(&mut rng, 0.0, 0.5),
+            ]
+        };
+        let ref_lever_m = if rng.random::<f64>() < 0.3 {
+            [
+                uniform(&mut rng, -0.2, 0.2),
+                uniform(&mut rng, -0.2, 0.2),
+                uniform(&mut rng, 0.2, 0.8),
+            ]
+        } else {
+            [0.0; 3]
+        };
+        let outage_count = match kind {
+            MissionKind::GnssOutages => rng.random_range(2..=4),
+            _ if rng.random::<f64>() < 0.1 => 1,
+            _ => 0,
+        };
+        let mut outages = Vec::new();
+        for _ in 0..outage_count {
+            let len = uniform(&mut rng, 5.0, 20.0);
+            let at = uniform(&mut rng, 20.0, (duration_s - len - 20.0).max(21.0));
+            outages.push((at, at + len));
+        }
+        let receipt_latency_s = (kind == MissionKind::ReceiptStamps).then(|| {
+            (
+                uniform(&mut rng, 0.005, 0.03),
+                uniform(&mut rng, 0.001, 0.01),
+            )
+        });
+        let jumps = if kind == MissionKind::PositionJumps {
+            (0..rng.random_range(2..=3))
+                .map(|_| {
+                    let size = uniform(&mut rng, 0.3, 2.0);
+                    let dir = uniform(&mut rng, 0.0, std::f64::consts::TAU);
+                    (
+                        uniform(&mut rng, 30.0, duration_s - 30.0),
+                        [
+                            size * dir.cos(),
+                            size * dir.sin(),
+                            uniform(&mut rng, -0.1, 0.1),
+                        ],
+                    )
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let clock_drift_ppm = match kind {
+            MissionKind::Drift => signed(&mut rng, 40.0, 150.0),
+            MissionKind::ShortDrift => {
+                if rng.random::<bool>() {
+                    50.0
+                } else {
+                    -50.0
+                }
+            }
+            _ => 0.0,
+        };
+        let time_offset_s = uniform(&mut rng, -2.0, 2.0);
+        let clock_step = (kind == MissionKind::Step).then(|| ClockStep {
+            at_s: uniform(&mut rng, 0.3, 0.7) * duration_s,
+            offset_s: time_offset_s + signed(&mut rng, 0.1, 1.0),
+        });
+        Scenario {
+            kind,
+            seed,
+            legged,
+            route,
+            gait,
+            terrain_m: if legged {
+                uniform(&mut rng, 0.0, 1.0)
+            } else {
+                uniform(&mut rng, 0.0, 0.5)
+            },
+            ref_rate_hz,
+            est_rate_hz,
+            ref_noise_m: uniform(&mut rng, 0.005, 0.03),
+            ref_slow_noise_m: uniform(&mut rng, 0.0, 0.01),
+            est_noise_m: uniform(&mut rng, 0.001, 0.005),
+            est_attitude_noise_rad: uniform(&mut rng, 0.02, 0.1).to_radians(),
+            ref_lever_m,
+            est_lever_m,
+            time_offset_s,
+            clock_drift_ppm,
+            clock_step,
+            scale_error: uniform(&mut rng, -0.03, 0.03),
+            yaw_walk_deg_per_sqrt_s: uniform(&mut rng, 0.02, 0.1),
+            outages,
+            receipt_latency_s,
+            jumps,
+        }
+    }
+
+    /// The mission's length, seconds.
+    pub fn duration_s(&self) -> f64 {
+        self.route.iter().map(|l| l.duration_s).sum()
+    }
+
+    /// Δt at reference time `t` (seconds from the start): the estimate's stamp of the instant t plus
+    /// Δt(t) is t on the reference clock (mean receipt latencies included).
+    pub fn offset_at(&self, t: f64) -> f64 {
+        let base = match self.clock_step {
+            Some(s) if t >= s.at_s => s.offset_s,
+            _ => self.time_offset_s,
+        };
+        let latency = self.receipt_latency_s.map_or(0.0, |(r, e)| r - e);
+        base - self.clock_drift_ppm * 1e-6 * t + latency
+    }
+
+    /// Simulates the scenario.
+    pub fn simulate(&self) -> ScenarioMission {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 1);
+        let body = Body::integrate(self);
+        let duration_s = body.duration_s();
+        let lever = |l: [f64; 3]| Vector3::new(l[0], l[1], l[2]);
+        let (ref_lever, est_lever) = (lever(self.ref_lever_m), lever(self.est_lever_m));
+
+        // The reference: white noise plus a first-order Gauss–Markov error (τ = 30 s).
+        let mut reference = Trajectory::new(false);
+        let ref_phase = rng.random::<f64>() / self.ref_rate_hz;
+        let n_ref = ((duration_s - ref_phase) * self.ref_rate_hz).floor() as usize + 1;
+        let tau = 30.0;
+        let mut slow = Vector3::zeros();
+        let (ref_lat, est_lat) = self.receipt_latency_s.map_or((None, None), |(r, e)| {
+            (Exp::new(1.0 / r).ok(), Exp::new(1.0 / e).ok())
+        });
+        for i in 0..n_ref {
+            let t = ref_phase + i as f64 / self.ref_rate_hz;
+            let a = (-1.0 / (self.ref_rate_hz * tau)).exp();
+            slow = slow * a + white(&mut rng, self.ref_slow_noise_m * (1.0 - a * a).sqrt());
+            let noise = white(&mut rng, self.ref_noise_m);
+            let late = ref_lat.map_or(0.0, |d| d.sample(&mut rng));
+            if self.outages.iter().any(|&(a, b)| t >= a && t <= b) {
+                continue;
+            }
+            let (p, _) = body.sensor(t, &ref_lever);
+            reference.push(
+                START_NS + ((t + late) * 1e9).round() as i64,
+                p + noise + slow,
+                None,
+            );
+        }
+        reference.sort_dedup();
+
+        // The estimate: increments of its sensor's true path, scaled and turned by a heading random
+        // walk, in a gravity-aligned frame that starts at its sensor with the body's heading.
+        let mut estimate = Trajectory::new(true);
+        let est_phase = rng.random::<f64>() / self.est_rate_hz;
+        let n_est = ((duration_s - est_phase) * self.est_rate_hz).floor() as usize + 1;
+        let (p0, _) = body.sensor(est_phase, &est_lever);
+        let frame = Rotation3::from_axis_angle(&Vector3::z_axis(), -body.yaw_at(est_phase));
+        let walk = self.yaw_walk_deg_per_sqrt_s.to_radians() / self.est_rate_hz.sqrt();
+        let (mut yaw_err, mut pos, mut last) = (0.0f64, Vector3::zeros(), p0);
+        let mut jumped = Vector3::zeros();
+        let mut jumps = self.jumps.clone();
+        jumps.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut next_jump = 0;
+        for j in 0..n_est {
+            let t = est_phase + j as f64 / self.est_rate_hz;
+            let (p, r) = body.sensor(t, &est_lever);
+            let drift = Rotation3::from_axis_angle(&Vector3::z_axis(), yaw_err);
+            pos += drift * (frame * (p - last)) * (1.0 + self.scale_error);
+            last = p;
+            yaw_err += walk * gauss(&mut rng);
+            while next_jump < jumps.len() && jumps[next_jump].0 <= t {
+                let d = jumps[next_jump].1;
+                jumped += Vector3::new(d[0], d[1], d[2]);
+                next_jump += 1;
+            }
+            let attitude = Rotation3::new(white(&mut rng, self.est_attitude_noise_rad));
+            let orientation = drift * frame * r * attitude;
+            let noise = white(&mut rng, self.est_noise_m);
+            let t_clock = t * (1.0 + self.clock_drift_ppm * 1e-6);
+            let offset = match self.clock_step {
+                Some(s) if t >= s.at_s => s.offset_s,
+                _ => self.time_offset_s,
+            };
+            let late = est_lat.map_or(0.0, |d| d.sample(&mut rng));
+            let stamp = START_NS + ((t_clock - offset + late) * 1e9).round() as i64;
+            estimate.push(
+                stamp,
+                pos + jumped + noise,
+                Some(UnitQuaternion::from_rotation_matrix(&orientation)),
+            );
+        }
+        // A backward clock step repeats a stretch of stamps: the recorder keeps them in order.
+        estimate.sort_dedup();
+        ScenarioMission {
+            scenario: self.clone(),
+            reference,
+            estimate,
+            duration_s,
+        }
+    }
+}
+
+/// A route of `duration_s` seconds for the kind (see the module doc).
+fn draw_route(
+    rng: &mut ChaCha8Rng,
+    legged: bool,
+    kind: MissionKind,
+    spins: f64,
+    duration_s: f64,
+) -> Vec<Leg> {
+    let leg = |d: f64, v: f64, k: f64| Leg {
+        duration_s: d,
+        speed_mps: v,
+        curvature: k,
+        spin_rps: 0.0,
+    };
+    let mut route = vec![leg(uniform(rng, 2.0, 4.0), 0.0, 0.0)];
+    let mut total = route[0].duration_s;
+    let straight = kind == MissionKind::NearStraight;
+    while total < duration_s {
+        let u: f64 = rng.random();
+        let next = if u < spins {
+            let rate = signed(rng, 0.3, 0.8);
+            let angle = uniform(rng, 60f64.to_radians(), 360f64.to_radians());
+            vec![
+                Leg {
+                    duration_s: angle / rate.abs(),
+                    speed_mps: 0.0,
+                    curvature: 0.0,
+                    spin_rps: rate,
+                },
+                leg(uniform(rng, 1.0, 3.0), 0.0, 0.0),
+            ]
+        } else if u < spins + if straight { 0.06 } else { 0.12 } {
+            vec![leg(uniform(rng, 2.0, 6.0), 0.0, 0.0)]
+        } else {
+            let (v, k) = if legged {
+                (uniform(rng, 0.25, 0.5), signed(rng, 0.1, 1.2))
+            } else if straight {
+                (uniform(rng, 0.5, 2.0), signed(rng, 0.0, 0.008))
+            } else {
+                (uniform(rng, 0.8, 2.0), signed(rng, 0.05, 0.4))
+            };
+            match rng.random_range(0..3) {
+                0 => vec![leg(
+                    uniform(rng, 5.0, 20.0),
+                    v,
+                    if straight { k } else { 0.0 },
+                )],
+                1 => vec![leg(uniform(rng, 5.0, 15.0), v, k)],
+                _ => {
+                    let d = uniform(rng, 4.0, 10.0);
+                    vec![leg(d, v, k), leg(d, v, -k)]
+                }
+            }
+        };
+        for l in next {
+            total += l.duration_s;
+            route.push(l);
+        }
+    }
+    route.push(leg(uniform(rng, 2.0, 4.0), 0.0, 0.0));
+    // Cut to the duration (the final stop kept).
+    let mut out = Vec::new();
+    let mut left = duration_s;
+    let last = route.pop();
+    for l in route {
+        if left <= 0.0 {
+            break;
+        }
+        out.push(Leg {
+            duration_s: l.duration_s.min(left),
+            ..l
+        });
+        left -= l.duration_s;
+    }
+    out.extend(last);
+    out
+}
+
+/// The body's planar motion at [`BODY_RATE_HZ`], with the terrain and the gait it is drawn on.
+struct Body {
+    /// (x, y, yaw, activity in [0, 1]) per step.
+    states: Vec<[f64; 4]>,
+    gait: Option<Gait>,
+    terrain: Terrain,
+}
+
+/// Rolling terrain: a sum of two sinusoidal ridges.
+#[derive(Clone, Copy)]
+struct Terrain {
+    amplitude: f64,
+    k1: [f64; 2],
+    k2: [f64; 2],
+    phase: [f64; 2],
+}
+
+impl Terrain {
+    fn height(&self, x: f64, y: f64) -> f64 {
+        self.amplitude
+            * ((self.k1[0] * x + self.k1[1] * y + self.phase[0]).sin()
+                + 0.5 * (self.k2[0] * x + self.k2[1] * y + self.phase[1]).sin())
+    }
+
+    /// ∂h/∂x, ∂h/∂y.
+    fn gradient(&self, x: f64, y: f64) -> (f64, f64) {
+        let c1 = self.amplitude * (self.k1[0] * x + self.k1[1] * y + self.phase[0]).cos();
+        let c2 = 0.5 * self.amplitude * (self.k2[0] * x + self.k2[1] * y + self.phase[1]).cos();
+        (
+            c1 * self.k1[0] + c2 * self.k2[0],
+            c1 * self.k1[1] + c2 * self.k2[1],
+        )
+    }
+}
+
+impl Body {
+    /// Speed follows each leg with bounded acceleration, the yaw rate with bounded yaw acceleration.
+    fn integrate(s: &Scenario) -> Body {
+        let mut rng = ChaCha8Rng::seed_from_u64(s.seed.wrapping_add(0x5151));
+        let (accel, yaw_accel) = if s.legged { (0.5, 1.5) } else { (1.0, 0.6) };
+        let dt = 1.0 / BODY_RATE_HZ;
+        let total = s.duration_s();
+        let n = (total * BODY_RATE_HZ).round() as usize + 1;
+        let mut states = Vec::with_capacity(n);
+        let (mut x, mut y) = (0.0f64, 0.0f64);
+        let mut yaw: f64 = uniform(&mut rng, -3.1, 3.1);
+        let (mut v, mut w) = (0.0f64, 0.0f64);
+        let mut legs = s.route.iter();
+        let mut leg = Leg {
+            duration_s: 0.0,
+            speed_mps: 0.0,
+            curvature: 0.0,
+            spin_rps: 0.0,
+        };
+        let mut leg_end = 0.0;
+        for i in 0..n {
+            let t = i as f64 * dt;
+            while t >= leg_end - 1e-12 {
+                match legs.next() {
+                    Some(l) => {
+                        leg = *l;
+                        leg_end += l.duration_s;
+                    }
+                    None => {
+                        leg.speed_mps = 0.0;
+                        leg.spin_rps = 0.0;
+                        leg_end = f64::INFINITY;
+                    }
+                }
+            }
+            let activity = (v / 0.15 + w.abs() / 0.3).min(1.0);
+            states.push([x, y, yaw, activity]);
+            v += (leg.speed_mps - v).clamp(-accel * dt, accel * dt);
+            let w_target = if leg.speed_mps > 0.0 {
+                v * leg.curvature
+            } else {
+                leg.spin_rps
+            };
+            w += (w_target - w).clamp(-yaw_accel * dt, yaw_accel * dt);
+            yaw += w * dt;
+            x += yaw.cos() * v * dt;
+            y += yaw.sin() * v * dt;
+        }
+        let wave = |rng: &mut ChaCha8Rng| {
+            let k = std::f64::consts::TAU / uniform(rng, 15.0, 40.0);
+            let dir = uniform(rng, 0.0, std::f64::consts::TAU);
+            [k * dir.cos(), k * dir.sin()]
+        };
+        let terrain = Terrain {
+            amplitude: s.terrain_m,
+            k1: wave(&mut rng),
+            k2: wave(&mut rng),
+            phase: [uniform(&mut rng, 0.0, 6.3), uniform(&mut rng, 0.0, 6.3)],
+        };
+        Body {
+            states,
+            gait: s.gait,
+            terrain,
+        }
+    }
+
+    fn duration_s(&self) -> f64 {
+        (self.states.len() - 1) as f64 / BODY_RATE_HZ
+    }
+
+    /// The planar state at `t`, linearly interpolated.
+    fn planar(&self, t: f64) -> [f64; 4] {
+        let x = (t * BODY_RATE_HZ).clamp(0.0, (self.states.len() - 1) as f64);
+        let i = (x.floor() as usize).min(self.states.len().saturating_sub(2));
+        let f = x - i as f64;
+        let (a, b) = (
+            self.states[i],
+            self.states[(i + 1).min(self.states.len() - 1)],
+        );
+        std::array::from_fn(|k| a[k] + (b[k] - a[k]) * f)
+    }
+
+    fn yaw_at(&self, t: f64) -> f64 {
+        self.planar(t)[2]
+    }
+
+    /// The position of a sensor at `lever` (body frame) and the body's attitude, at `t`.
+    fn sensor(&self, t: f64, lever: &Vector3<f64>) -> (Vector3<f64>, Rotation3<f64>) {
+        let [x, y, yaw, activity] = self.planar(t);
+        // The body's up axis along the terrain's normal, its forward axis the heading on the slope.
+        let (gx, gy) = self.terrain.gradient(x, y);
+        let up = Vector3::new(-gx, -gy, 1.0).normalize();
+        let heading = Vector3::new(yaw.cos(), yaw.sin(), 0.0);
+        let forward = (heading - up * heading.dot(&up)).normalize();
+        let left = up.cross(&forward);
+        let mut attitude =
+            Rotation3::from_matrix_unchecked(nalgebra::Matrix3::from_columns(&[forward, left, up]));
+        let mut p = Vector3::new(x, y, self.terrain.height(x, y));
+        if let Some(g) = self.gait {
+            let phase = std::f64::consts::TAU * g.frequency_hz * t;
+            let sway = g.sway_m * phase.sin() * activity;
+            let bob = g.bob_m * (2.0 * phase).sin() * activity;
+            p += attitude * Vector3::new(0.0, sway, bob);
+            let roll = g.roll_rad * (phase + 0.7).sin() * activity;
+            let pitch = g.pitch_rad * (2.0 * phase + 1.3).sin() * activity;
+            attitude *= Rotation3::from_euler_angles(roll, pitch, 0.0);
+        }
+        (p + attitude * lever, attitude)
+    }
+}
+
+fn gauss(rng: &mut ChaCha8Rng) -> f64 {
+    StandardNormal.sample(rng)
+}
+
+/// Three independent Gaussian samples of standard deviation `sigma`.
+fn white(rng: &mut ChaCha8Rng, sigma: f64) -> Vector3<f64> {
+    Vector3::new(gauss(rng), gauss(rng), gauss(rng)) * sigma
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A drawn mission is reproduced from its kind and seed, and its streams follow the truth: the
+    /// estimate's stamps plus Δt(t) land on the reference clock.
+    #[test]
+    fn missions_are_reproducible_and_follow_their_truth() {
+        for kind in MissionKind::ALL {
+            let a = Scenario::draw(kind, 3);
+            assert_eq!(a, Scenario::draw(kind, 3), "{kind:?}");
+            assert!(
+                (a.duration_s() - a.route.iter().map(|l| l.duration_s).sum::<f64>()).abs() < 1e-9
+            );
+        }
+        let s = Scenario::draw(MissionKind::Ground, 5);
+        let m = s.simulate();
+        assert!(m.reference.len() > 100 && m.estimate.len() > 100);
+        // Constant clock, no latency: the estimate's stamps plus Δt are its sampling instants, a
+        // regular grid starting within one period of the reference's start.
+        let period = 1.0 / s.est_rate_hz;
+        let on_ref: Vec<f64> = m
+            .estimate
+            .stamps_ns
+            .iter()
+            .map(|&n| (n - START_NS) as f64 * 1e-9 + s.offset_at(0.0))
+            .collect();
+        assert!(on_ref[0] >= -1e-6 && on_ref[0] < period, "{}", on_ref[0]);
+        assert!(on_ref
+            .windows(2)
+            .all(|w| (w[1] - w[0] - period).abs() < 1e-6));
+    }
+
+    #[test]
+    fn kinds_parse_from_their_names() {
+        for k in MissionKind::ALL {
+            assert_eq!(k.as_str().parse::<MissionKind>(), Ok(k));
+        }
+        assert!("nope".parse::<MissionKind>().is_err());
+    }
+}
