@@ -53,10 +53,14 @@ impl Inputs {
 /// APE (translation part) and RPE point distance need positions only, and RPE's translation part and
 /// KITTI drift need the reference's orientation too, so a reference without one (PointStamped,
 /// NavSatFix: the usual GNSS, prism or total station) makes the estimate's useless. Kept for levers
-/// (moved through the body frame), the aligned export and the annotated recording, and whenever the
-/// reference's type is unknown before the pass. Half of what a 200 Hz odometry costs in memory.
+/// (moved through the body frame), the aligned export and the annotated recording, the pose fit of
+/// `--offset-method auto` (see [`crate::align::pose_fit`]), and whenever the reference's type is
+/// unknown before the pass. Half of what a 200 Hz odometry costs in memory.
 fn positions_only(config: &EvalConfig, source: &dyn crate::sources::Source) -> Vec<String> {
+    let pose_fit = config.time_offset_s.is_none()
+        && config.offset_method == crate::align::time_offset::OffsetMethod::Auto;
     let needed_elsewhere = config.keep_orientations
+        || pose_fit
         || config.export_aligned.is_some()
         || config.reference_lever.is_some()
         || !config.estimate_levers.is_empty();

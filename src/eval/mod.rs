@@ -262,7 +262,8 @@ fn evaluate_estimate(
                 )],
             };
             let runs = auto.as_ref().map_or(&single, |a| &a.runs);
-            let methods = runs.iter().map(|(m, r)| method_report(*m, r)).collect();
+            let methods: Vec<OffsetMethodReport> =
+                runs.iter().map(|(m, r)| method_report(*m, r)).collect();
             // The answer of the requested method (`auto`: the combined one) and why.
             let (chosen, reason, implied_lever) = match &auto {
                 Some(auto) => {
@@ -284,10 +285,35 @@ fn evaluate_estimate(
             };
             match chosen {
                 Some(Ok(o)) if o.status == OffsetStatus::Ok => {
-                    let (report, w) = over_time(config, &params, &pair, &o, &est.name, t0_ns);
+                    // `auto` refines its answer by the pose fit when the estimate has orientations.
+                    let orientations = est.trajectory.orientations.as_deref();
+                    let posed = match orientations {
+                        Some(q) if config.offset_method == OffsetMethod::Auto => {
+                            pose_over_time(config, &params, &pair, q, &o, &est.name, t0_ns)
+                        }
+                        _ => None,
+                    };
+                    let (report, w, method, methods, reason) = match posed {
+                        Some((report, w, note, entry)) => {
+                            let mut methods = methods;
+                            methods.push(entry);
+                            (
+                                report,
+                                w,
+                                OffsetMethod::Pose,
+                                methods,
+                                format!("{reason}; {note}"),
+                            )
+                        }
+                        None => {
+                            let (report, w) =
+                                over_time(config, &params, &pair, &o, &est.name, t0_ns);
+                            (report, w, o.method, methods, reason)
+                        }
+                    };
                     warnings.extend(w);
                     TimeOffsetReport {
-                        method: o.method.into(),
+                        method: method.into(),
                         offset_s: report.offset_s,
                         applied_s: report.offset_s,
                         correlation: Some(o.correlation),
@@ -483,6 +509,156 @@ fn drift_report(r: &DriftErrorResult, t0_s: f64) -> DriftErrorReport {
     }
 }
 
+/// The clock model from the pose fit ([`crate::align::pose_model`]) around the signal searches'
+/// answer `o`: the report's fields, the warnings of a non-constant model chosen from the data, the
+/// note for the reason, and the `pose` entry of `methods`. `None` when the fit cannot be made (the
+/// signal searches' profile is used instead).
+#[allow(clippy::too_many_arguments)]
+fn pose_over_time(
+    config: &EvalConfig,
+    params: &crate::align::time_offset::OffsetParams,
+    pair: &Pair<'_>,
+    orientations: &[nalgebra::UnitQuaternion<f64>],
+    o: &OffsetEstimate,
+    name: &str,
+    t0_ns: i64,
+) -> Option<(TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport)> {
+    use crate::align::pose_fit::{PoseData, PoseFitParams, PoseTrack};
+    use crate::align::pose_model::pose_clock_model;
+    use crate::align::signals::SignalView;
+    let (ref_t, ref_p) = pair.reference;
+    let (est_t, est_p) = pair.estimate;
+    let data = PoseData {
+        ref_t,
+        ref_p,
+        estimate: PoseTrack {
+            t: est_t,
+            p: est_p,
+            q: orientations,
+        },
+        params: PoseFitParams {
+            max_gap_s: params.max_gap_s.unwrap_or(params.curvature.dt_max_s),
+            window_s: None,
+        },
+    };
+    // The speed signals locate a step's time (computed already by `auto`).
+    let speed =
+        crate::align::time_offset::prepared_signals(OffsetMethod::Speed, pair, params, o.offset_s)
+            .ok();
+    let views = speed.as_ref().map(|((r, e), lever)| {
+        let e = match lever {
+            Some(d) => SignalView::with_lever(e, *d),
+            None => SignalView::of(e),
+        };
+        (SignalView::of(r), e)
+    });
+    let pc = pose_clock_model(
+        &data,
+        o.offset_s,
+        &config.offset_profile,
+        views,
+        config.offset_model,
+    )?;
+    let t0_s = t0_ns as f64 * 1e-9;
+    let model = &pc.model;
+    let mut warnings = Vec::new();
+    if config.offset_model.is_none() {
+        let code = match model.model {
+            OffsetModel::Linear => Some("clock_drift_suspected"),
+            OffsetModel::Piecewise => Some("clock_step_suspected"),
+            OffsetModel::Constant => None,
+        };
+        if let Some(code) = code {
+            warnings.push(Warning {
+                code: code.into(),
+                message: format!(
+                    "{name}: the clock offset is not constant — {}; the estimate's stamps were corrected by this model (force one with --offset-model)",
+                    model.reason
+                ),
+            });
+        }
+    }
+    let lever = pc.fit.lever_m;
+    let lever_sigma = pc.fit.lever_sigma_m;
+    let mut note = format!(
+        "refined by the pose fit ({} windows of {:.0} s: Δt {:+.4} ± {:.4} s, the estimate's sensor at ({:+.2}, {:+.2}, {:+.2}) m from the reference's point, fitted alongside)",
+        pc.fit.windows.len(),
+        pc.profile.window_s,
+        pc.whole.0,
+        pc.whole.1,
+        lever.x,
+        lever.y,
+        lever.z
+    );
+    if pc.outlier_windows > 0 {
+        note.push_str(&format!(
+            "; {} window(s) left out: the estimate jumps there (a position correction, not a clock event)",
+            pc.outlier_windows
+        ));
+    }
+    if pc.fit.inseparable() {
+        note.push_str(
+            "; at this mission's nearly constant speed a forward lever and Δt are inseparable: σ says how much",
+        );
+    }
+    let entry = OffsetMethodReport {
+        method: OffsetMethod::Pose.as_str().into(),
+        offset_s: Some(pc.whole.0),
+        correlation: crate::align::offset_profile::median(
+            &pc.profile
+                .windows
+                .iter()
+                .map(|w| w.correlation)
+                .collect::<Vec<_>>(),
+        ),
+        confidence: None,
+        status: "ok".into(),
+        error: None,
+        margin: None,
+        defined_fraction: None,
+    };
+    let report = TimeOffsetReport {
+        offset_s: model.offset_s,
+        sigma_s: Some(model.sigma_s),
+        model: Some(model.model),
+        model_reason: Some(model.reason.clone()),
+        drift_measured_ppm: model.drift_ppm,
+        drift_sigma_ppm: model.drift_sigma_ppm,
+        drift_ppm: model
+            .drift_ppm
+            .filter(|_| model.model == OffsetModel::Linear),
+        t_mid: (model.model == OffsetModel::Linear).then_some(model.t_mid + t0_s),
+        drift_resolution_ppm: model.drift_resolution_ppm,
+        segments: model
+            .segments
+            .iter()
+            .map(|s| OffsetSegmentReport {
+                t_start: s.t_start + t0_s,
+                t_end: s.t_end + t0_s,
+                offset_s: s.offset_s,
+                sigma_s: s.sigma_s,
+            })
+            .collect(),
+        profile: pc
+            .profile
+            .windows
+            .iter()
+            .map(|w| OffsetProfilePoint {
+                t: w.t + t0_s,
+                offset_s: w.offset_s,
+                sigma_s: w.sigma_s,
+                correlation: w.correlation,
+            })
+            .collect(),
+        profile_window_s: Some(pc.profile.window_s),
+        profile_step_s: Some(pc.profile.step_s),
+        fitted_lever_m: Some([lever.x, lever.y, lever.z]),
+        fitted_lever_sigma_m: lever_sigma.map(|s| [s.x, s.y, s.z]),
+        ..Default::default()
+    };
+    Some((report, warnings, note, entry))
+}
+
 /// The offset profile of the applied method around its whole-mission answer `o`, the clock model
 /// (chosen or `--offset-model`), its report fields and the warnings of a non-constant model chosen
 /// from the data. On a mission too short for a profile: a constant model and no profile.
@@ -544,7 +720,7 @@ fn over_time(
             .drift_ppm
             .filter(|_| model.model == OffsetModel::Linear),
         t_mid: (model.model == OffsetModel::Linear).then_some(model.t_mid + t0_s),
-        drift_resolution_ppm: model.drift_sigma_ppm.map(|s| 3.0 * s),
+        drift_resolution_ppm: model.drift_resolution_ppm,
         segments: model
             .segments
             .iter()

@@ -96,15 +96,50 @@ pub struct ClockModel {
     /// measured when the profile has two usable windows; applied only when `model` is linear.
     pub drift_ppm: Option<f64>,
     pub drift_sigma_ppm: Option<f64>,
+    /// The smallest drift the criterion would tell from a constant clock on this profile, ppm:
+    /// z·σ_drift with z = √(BIC margin + ln n) (what a linear model must gain to be chosen).
+    pub drift_resolution_ppm: Option<f64>,
     /// The segments (piecewise; empty otherwise).
     pub segments: Vec<ClockSegment>,
     /// BIC of constant, linear and piecewise (NaN when not computed).
     pub bic: [f64; 3],
     /// Why this model, in one sentence.
     pub reason: String,
+    /// The criterion's verdict the reason ends with.
+    #[serde(skip)]
+    pub criterion: String,
 }
 
 impl ClockModel {
+    /// Writes `reason` from the model's numbers and its criterion.
+    pub fn describe(&mut self) {
+        let why = &self.criterion;
+        self.reason = match self.model {
+            OffsetModel::Constant => format!(
+                "constant {:+.4} ± {:.4} s: {why}",
+                self.offset_s, self.sigma_s
+            ),
+            OffsetModel::Linear => format!(
+                "linear drift {:+.1} ± {:.1} ppm: {why}",
+                self.drift_ppm.unwrap_or(f64::NAN),
+                self.drift_sigma_ppm.unwrap_or(f64::NAN)
+            ),
+            OffsetModel::Piecewise => {
+                let steps: Vec<String> = self
+                    .segments
+                    .windows(2)
+                    .map(|s| {
+                        format!(
+                            "{:+.3} → {:+.3} s at {:.0} s after the reference's start",
+                            s[0].offset_s, s[1].offset_s, s[1].t_start
+                        )
+                    })
+                    .collect();
+                format!("piecewise, {}: {why}", steps.join(", "))
+            }
+        };
+    }
+
     /// A constant model with no profile behind it (too short a mission, or forced without one).
     pub fn constant(offset_s: f64, sigma_s: f64, reason: String) -> ClockModel {
         ClockModel {
@@ -114,9 +149,11 @@ impl ClockModel {
             t_mid: 0.0,
             drift_ppm: None,
             drift_sigma_ppm: None,
+            drift_resolution_ppm: None,
             segments: Vec::new(),
             bic: [f64::NAN; 3],
             reason,
+            criterion: String::new(),
         }
     }
 }
@@ -217,21 +254,19 @@ fn segment(w: &[ProfileWindow], min_len: usize, rho: f64, n_eff: f64) -> Vec<usi
 }
 
 /// Chooses the model from `profile` (see the module doc). `whole` is the whole mission's Δt and its
-/// residual σ; `signals` the method's reference and estimate signals (estimate on its own clock), used
-/// to locate change times. `forced`: the model to fit whatever the criterion says.
+/// standard error (calibrated); `signals` the method's reference and estimate signals (estimate on its
+/// own clock), used to locate change times (`None`: between the windows). `forced`: the model to fit
+/// whatever the criterion says.
 pub fn choose_model(
     profile: &OffsetProfile,
-    whole: (f64, Option<f64>),
-    signals: (SignalView<'_>, SignalView<'_>),
+    whole: (f64, f64),
+    signals: Option<(SignalView<'_>, SignalView<'_>)>,
     forced: Option<OffsetModel>,
 ) -> ClockModel {
     let w = profile.usable();
     let rho = profile.redundancy();
     let n_eff = w.len() as f64 / rho;
-    let whole_sigma = whole
-        .1
-        .map_or(SIGMA_FLOOR_S, |s| s * profile.sigma_scale)
-        .max(SIGMA_FLOOR_S);
+    let whole_sigma = whole.1;
     let Some(c) = fit(&w, 0.0, false, rho) else {
         return ClockModel::constant(
             whole.0,
@@ -258,7 +293,13 @@ pub fn choose_model(
             (2 * splits.len() + 1) as f64,
         )
     };
-    let drift = lin.map(|l| (-l.b * 1e6, l.sigma_b * 1e6));
+    // The drift's σ from the windows' σ, raised by the scatter about the line where it exceeds them.
+    let drift = lin.map(|l| {
+        let dof = (w.len() as f64 - 2.0).max(1.0);
+        let birge = (l.chi2 / rho / (dof / rho)).sqrt().max(1.0);
+        (-l.b * 1e6, l.sigma_b * 1e6 * birge)
+    });
+    let z = (BIC_MARGIN + n_eff.max(1.0).ln()).sqrt();
     let enough = n_eff >= MIN_INDEPENDENT_WINDOWS;
     let chosen = forced.unwrap_or_else(|| {
         let best_other = bic_l.min(bic_p);
@@ -280,11 +321,13 @@ pub fn choose_model(
         t_mid,
         drift_ppm: drift.map(|d| d.0),
         drift_sigma_ppm: drift.map(|d| d.1),
+        drift_resolution_ppm: drift.map(|d| z * d.1),
         segments: Vec::new(),
         bic: [bic_c, bic_l, bic_p],
         reason: String::new(),
+        criterion: String::new(),
     };
-    let why = if forced.is_some() {
+    model.criterion = if forced.is_some() {
         "forced with --offset-model".to_string()
     } else if !enough {
         format!(
@@ -304,7 +347,8 @@ pub fn choose_model(
         windows: &w,
         splits: &splits,
     };
-    fill(&mut model, &fits, profile, signals, &why);
+    fill(&mut model, &fits, profile, signals);
+    model.describe();
     model
 }
 
@@ -316,31 +360,20 @@ struct Fits<'a> {
     splits: &'a [usize],
 }
 
-/// Sets the chosen model's parameters and its one-sentence reason.
+/// Sets the chosen model's parameters.
 fn fill(
     model: &mut ClockModel,
     f: &Fits<'_>,
     profile: &OffsetProfile,
-    signals: (SignalView<'_>, SignalView<'_>),
-    why: &str,
+    signals: Option<(SignalView<'_>, SignalView<'_>)>,
 ) {
     match model.model {
-        OffsetModel::Constant => {
-            model.reason = format!(
-                "constant {:+.3} ± {:.3} s: {why}",
-                model.offset_s, model.sigma_s
-            );
-        }
+        OffsetModel::Constant => {}
         OffsetModel::Linear => {
             let l = f.linear.unwrap_or(f.constant);
             model.offset_s = l.a;
             model.sigma_s = l.sigma_a.max(SIGMA_FLOOR_S);
             model.drift_ppm = Some(-l.b * 1e6);
-            model.reason = format!(
-                "linear drift {:+.0} ± {:.0} ppm: {why}",
-                -l.b * 1e6,
-                l.sigma_b * 1e6
-            );
         }
         OffsetModel::Piecewise => {
             model.segments = piecewise_segments(f.windows, f.splits, profile, signals);
@@ -352,17 +385,6 @@ fn fill(
                 model.offset_s = s.offset_s;
                 model.sigma_s = s.sigma_s;
             }
-            let steps: Vec<String> = model
-                .segments
-                .windows(2)
-                .map(|s| {
-                    format!(
-                        "{:+.3} → {:+.3} s at {:.0} s after the reference's start",
-                        s[0].offset_s, s[1].offset_s, s[1].t_start
-                    )
-                })
-                .collect();
-            model.reason = format!("piecewise, {}: {why}", steps.join(", "));
         }
     }
 }
@@ -380,7 +402,7 @@ fn piecewise_segments(
     w: &[ProfileWindow],
     splits: &[usize],
     profile: &OffsetProfile,
-    (r, e): (SignalView<'_>, SignalView<'_>),
+    signals: Option<(SignalView<'_>, SignalView<'_>)>,
 ) -> Vec<ClockSegment> {
     let half = 0.5 * profile.window_s;
     let rho = profile.redundancy();
@@ -393,7 +415,8 @@ fn piecewise_segments(
     for (k, &i) in splits.iter().enumerate() {
         let (lo, hi) = (w[i - 1].t - half, w[i].t + half);
         changes.push(
-            locate_change((r, e), (means[k], means[k + 1]), (lo, hi))
+            signals
+                .and_then(|re| locate_change(re, (means[k], means[k + 1]), (lo, hi)))
                 .unwrap_or(0.5 * (w[i - 1].t + w[i].t)),
         );
     }
@@ -521,6 +544,10 @@ pub fn clock_model_of(
         whole.offset_s,
         profile,
     );
-    let m = choose_model(&p, (whole.offset_s, whole.sigma_s), (r, e), forced);
+    let whole_sigma = whole
+        .sigma_s
+        .map_or(SIGMA_FLOOR_S, |s| s * p.sigma_scale)
+        .max(SIGMA_FLOOR_S);
+    let m = choose_model(&p, (whole.offset_s, whole_sigma), Some((r, e)), forced);
     Ok((p, m))
 }

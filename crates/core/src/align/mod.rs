@@ -8,6 +8,8 @@ pub(crate) mod fine_sums;
 pub mod grid;
 pub mod offset_profile;
 pub(crate) mod offset_sigma;
+pub mod pose_fit;
+pub mod pose_model;
 pub(crate) mod signals;
 pub mod speed;
 pub(crate) mod still;

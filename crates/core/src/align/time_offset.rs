@@ -60,6 +60,9 @@ pub enum OffsetMethod {
     /// Runs `speed`, `signed-curvature` and `curvature` and applies a consistent, confident answer
     /// (see [`crate::align::auto_offset`]).
     Auto,
+    /// The positions themselves, with the estimate's body-frame lever fitted (needs the estimate's
+    /// orientation; see [`crate::align::pose_fit`]): `auto` refines its answer with it.
+    Pose,
 }
 
 impl OffsetMethod {
@@ -70,6 +73,7 @@ impl OffsetMethod {
             OffsetMethod::Speed => "speed",
             OffsetMethod::SignedCurvature => "signed-curvature",
             OffsetMethod::Auto => "auto",
+            OffsetMethod::Pose => "pose",
         }
     }
 
@@ -78,7 +82,9 @@ impl OffsetMethod {
     pub fn centering(&self, params: &OffsetParams) -> Centering {
         match self {
             OffsetMethod::Speed if params.speed_mean_removed => Centering::MeanRemoved,
-            OffsetMethod::SignedCurvature | OffsetMethod::Auto => Centering::MeanRemoved,
+            OffsetMethod::SignedCurvature | OffsetMethod::Auto | OffsetMethod::Pose => {
+                Centering::MeanRemoved
+            }
             _ => Centering::Raw,
         }
     }
@@ -230,11 +236,13 @@ pub fn estimate_time_offset_cached(
     (ref_exclude, est_exclude): (Intervals<'_>, Intervals<'_>),
 ) -> Result<OffsetEstimate> {
     check_params(params)?;
-    if method == OffsetMethod::Auto {
-        // `auto` is decided above the search (crate::align::auto_offset), never inside it.
-        return Err(Error::InvalidArgument(
-            "time offset: `auto` combines several searches; call auto_time_offset".into(),
-        ));
+    if matches!(method, OffsetMethod::Auto | OffsetMethod::Pose) {
+        // `auto` is decided above the search (crate::align::auto_offset), and the pose fit refines
+        // its answer (crate::align::pose_fit), never inside it.
+        return Err(Error::InvalidArgument(format!(
+            "time offset: `{}` is not a signal search; call auto_time_offset",
+            method.as_str()
+        )));
     }
     let gap = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
     let (r, e) = pair.signals(method, params)?;

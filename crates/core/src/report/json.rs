@@ -214,6 +214,13 @@ pub struct TimeOffsetReport {
     pub profile_window_s: Option<f64>,
     #[serde(default)]
     pub profile_step_s: Option<f64>,
+    /// The pose fit's lever: the estimate's sensor relative to the reference's point, in the
+    /// estimate's body frame (x forward, y left, z up), metres, fitted alongside Δt; and its σ (the
+    /// jackknife over windows). Absent when the pose fit did not run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fitted_lever_m: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fitted_lever_sigma_m: Option<[f64; 3]>,
 }
 
 /// Whether the applied clock offset can be trusted.

@@ -390,9 +390,10 @@ impl Scenario {
         let n_ref = ((duration_s - ref_phase) * self.ref_rate_hz).floor() as usize + 1;
         let tau = 30.0;
         let mut slow = Vector3::zeros();
-        let (ref_lat, est_lat) = self.receipt_latency_s.map_or((None, None), |(r, e)| {
-            (Exp::new(1.0 / r).ok(), Exp::new(1.0 / e).ok())
-        });
+        let exp = |mean: f64| (mean > 0.0).then(|| Exp::new(1.0 / mean).ok()).flatten();
+        let (ref_lat, est_lat) = self
+            .receipt_latency_s
+            .map_or((None, None), |(r, e)| (exp(r), exp(e)));
         for i in 0..n_ref {
             let t = ref_phase + i as f64 / self.ref_rate_hz;
             let a = (-1.0 / (self.ref_rate_hz * tau)).exp();
