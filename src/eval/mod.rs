@@ -578,11 +578,10 @@ fn pose_over_time(
             });
         }
     }
-    let lever = pc.fit.lever_m;
-    let lever_sigma = pc.fit.lever_sigma_m;
+    let (lever, lever_sigma) = pc.lever;
     let mut note = format!(
         "refined by the pose fit ({} windows of {:.0} s: Δt {:+.4} ± {:.4} s, the estimate's sensor at ({:+.2}, {:+.2}, {:+.2}) m from the reference's point, fitted alongside)",
-        pc.fit.windows.len(),
+        pc.profile.windows.len(),
         pc.profile.window_s,
         pc.whole.0,
         pc.whole.1,
@@ -596,7 +595,7 @@ fn pose_over_time(
             pc.outlier_windows
         ));
     }
-    if pc.fit.inseparable() {
+    if pc.fit.as_ref().is_some_and(|f| f.inseparable()) {
         note.push_str(
             "; at this mission's nearly constant speed a forward lever and Δt are inseparable: σ says how much",
         );

@@ -4,10 +4,12 @@
 //! σ: BIC = χ²/ρ + k·ln(n/ρ), where ρ = window/step is how many windows see each stretch of the
 //! mission (the windows overlap, so χ² and n are counted ρ times) and k the model's parameters
 //! (constant 1, linear 2, one more mean and one change time per step). Each window's χ² is capped
-//! at [`CHI2_CAP`] (5σ): one window spoiled by a position jump of the estimate (a localiser
-//! correcting itself) cannot decide a model alone. `constant` is kept unless another model lowers the
-//! BIC by at least [`BIC_MARGIN`] ("very strong" evidence on the Kass–Raftery scale) and the profile
-//! holds at least [`MIN_INDEPENDENT_WINDOWS`] independent windows.
+//! at [`CHI2_CAP`] (3σ): one window spoiled by a position jump of the estimate (a localiser
+//! correcting itself) cannot decide a model alone. The simplest model whose BIC is within
+//! [`BIC_MARGIN`] ("very strong" evidence on the Kass–Raftery scale) of the lowest is chosen, in the
+//! order constant, linear, piecewise — a drift is not called steps, nor a constant a drift, unless
+//! the data insist — and only `constant` on a profile of fewer than [`MIN_INDEPENDENT_WINDOWS`]
+//! independent windows.
 //!
 //! **Steps** are found by binary segmentation (the split of a stretch that lowers its χ² most, kept
 //! while it lowers the BIC by [`BIC_MARGIN`]; at most [`MAX_STEPS`]); a segment spans at least two
@@ -21,12 +23,12 @@
 use crate::align::offset_profile::{OffsetProfile, ProfileWindow, SIGMA_FLOOR_S};
 use crate::align::time_offset::{Pair, SignalView};
 
-/// A model must lower the BIC by this much to replace `constant`.
+/// A model must lower the BIC by this much to replace a simpler one.
 pub const BIC_MARGIN: f64 = 10.0;
 /// The largest χ² one window contributes.
-pub const CHI2_CAP: f64 = 25.0;
+pub const CHI2_CAP: f64 = 9.0;
 /// The fewest independent windows (n/ρ) on which a model other than `constant` is chosen.
-pub const MIN_INDEPENDENT_WINDOWS: f64 = 4.0;
+pub const MIN_INDEPENDENT_WINDOWS: f64 = 6.0;
 /// The most steps looked for.
 pub const MAX_STEPS: usize = 3;
 
@@ -302,15 +304,13 @@ pub fn choose_model(
     let z = (BIC_MARGIN + n_eff.max(1.0).ln()).sqrt();
     let enough = n_eff >= MIN_INDEPENDENT_WINDOWS;
     let chosen = forced.unwrap_or_else(|| {
-        let best_other = bic_l.min(bic_p);
-        if enough && best_other <= bic_c - BIC_MARGIN {
-            if bic_p < bic_l {
-                OffsetModel::Piecewise
-            } else {
-                OffsetModel::Linear
-            }
-        } else {
+        let best = bic_c.min(bic_l).min(bic_p);
+        if !enough || bic_c <= best + BIC_MARGIN {
             OffsetModel::Constant
+        } else if bic_l <= best + BIC_MARGIN {
+            OffsetModel::Linear
+        } else {
+            OffsetModel::Piecewise
         }
     });
     let constant_sigma = whole_sigma.max(c.sigma_a);
@@ -336,7 +336,7 @@ pub fn choose_model(
         )
     } else {
         format!(
-            "BIC constant {bic_c:.1}, linear {bic_l:.1}, piecewise {bic_p:.1} over {} windows of {:.0} s (another model must be {BIC_MARGIN:.0} lower)",
+            "BIC constant {bic_c:.1}, linear {bic_l:.1}, piecewise {bic_p:.1} over {} windows of {:.0} s (a more complex model must be {BIC_MARGIN:.0} lower)",
             w.len(),
             profile.window_s
         )

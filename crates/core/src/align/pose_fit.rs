@@ -47,8 +47,8 @@
 //! of freedom) times one factor f for the mission, from the windows' scatter about the line through
 //! their neighbours: e_k = Δt_k − (interpolation of Δt_{k−1} and Δt_{k+1} at t_k) is free of any
 //! constant and any linear drift, so under honest σ each e_k/σ(e_k) is a unit normal; f² is the
-//! Winsorized mean of those squares (capped at [`WINSOR_CHI2`], so that a step, which spoils two, does
-//! not decide it). This is what makes a drift or a step, judged against the windows' σ, a claim the
+//! mean of those squares with the ones beyond 4σ set aside ([`CLIP_CHI2`]: a step, which spoils
+//! two, does not decide it). This is what makes a drift or a step, judged against the windows' σ, a claim the
 //! data support (see [`crate::align::clock_model`]).
 
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, UnitQuaternion, Vector3};
@@ -67,10 +67,19 @@ pub const SCALE_PRIOR_M: f64 = 1.0;
 pub const DRIFT_PRIOR_M2S2: f64 = 400.0;
 /// Prior σ of each lever component, metres (keeps a lever the data cannot see at 0).
 pub const LEVER_PRIOR_M: f64 = 1.0;
-/// The largest χ² one window's scatter contributes to the profile's scale factor.
-pub const WINSOR_CHI2: f64 = 4.0;
-/// E[min(χ²₁, 4)]: what the Winsorized mean of unit normals' squares comes to.
-const WINSOR_MEAN: f64 = 0.9205;
+/// A window's squared scatter beyond this many (squared) σ of the current factor is set aside when
+/// the profile's scale factor is estimated (4σ).
+pub const CLIP_CHI2: f64 = 16.0;
+/// E[χ²₁ | χ²₁ ≤ 16]: what the clipped mean of unit normals' squares comes to.
+const CLIPPED_MEAN: f64 = 0.9989;
+/// The median of χ²₁.
+const CHI2_1_MEDIAN: f64 = 0.4549;
+/// The half-step h of the instrument's central differences: two of the estimate's periods (the
+/// samples it interpolates are not those of the point) and at least 50 ms (a difference over
+/// shorter times is mostly the estimate's noise: 3 mm of noise over ±10 ms is 0.2 m/s), at most
+/// 0.25 s, seconds.
+const STENCIL_MIN_S: f64 = 0.05;
+const STENCIL_MAX_S: f64 = 0.25;
 /// Gauss–Newton iterations at most.
 const MAX_ITERATIONS: usize = 20;
 /// The largest change of an offset parameter in one iteration, seconds.
@@ -146,9 +155,6 @@ impl ClockShape {
 struct At {
     p: Vector3<f64>,
     r: Matrix3<f64>,
-    /// The interpolant's slopes d/dt of p and r (constant between two samples).
-    dp: Vector3<f64>,
-    dr: Matrix3<f64>,
 }
 
 /// Linear interpolation of the estimate's poses.
@@ -158,8 +164,8 @@ struct Sampler<'a> {
 }
 
 impl Sampler<'_> {
-    /// The pose at `t` (estimate clock); `None` outside the track or across a gap. `hint`: the index
-    /// found last (rising queries walk from it).
+    /// The pose at `t` (estimate clock); `None` outside the track or across a gap longer than the
+    /// largest gap. `hint`: the index found last (rising queries walk from it).
     fn at(&self, t: f64, hint: &mut usize) -> Option<At> {
         let ts = self.track.t;
         let n = ts.len();
@@ -187,8 +193,6 @@ impl Sampler<'_> {
         Some(At {
             p: self.track.p[a] + (self.track.p[b] - self.track.p[a]) * f,
             r: ra + (rb - ra) * f,
-            dp: (self.track.p[b] - self.track.p[a]) / span,
-            dr: (rb - ra) / span,
         })
     }
 }
@@ -213,10 +217,12 @@ impl Window {
 struct Terms {
     n: usize,
     rss: f64,
-    /// The reduced normal equations over the shared parameters: `h` = Σ v·v (v the instrument, a
-    /// smoothed derivative of the model), `j` = Σ v·∂e/∂θ (the exact derivative: the Newton
-    /// Jacobian of the estimating equations), `g` = Σ v·e; each with the window's similarity
-    /// eliminated.
+    /// The estimating equations g = Σ v·e over the shared parameters, v the instrument (∂model/∂θ
+    /// from central differences over ±h, which interpolate other samples of the estimate than the
+    /// point itself: the residual's own noise does not enter them); h = Σ v·v; j = Σ v·w with w the
+    /// same derivative over two of the estimate's periods more (samples independent of v's again):
+    /// the Newton Jacobian of g, free of the bias Σ v·v takes from v's noise. The window's similarity and drift eliminated (Schur
+    /// complement).
     h: DMatrix<f64>,
     j: DMatrix<f64>,
     g: DVector<f64>,
@@ -232,21 +238,20 @@ struct Problem<'a> {
     ref_t: &'a [f64],
     ref_p: &'a [Vector3<f64>],
     sampler: Sampler<'a>,
-    /// Half-step of the central difference for ∂/∂Δt, seconds: two of the estimate's periods at
-    /// least, so that the difference and the point it belongs to interpolate different samples
-    /// (the same samples would correlate the Jacobian with the estimate's noise in the residual and
-    /// bias Δt by a millisecond at 200 Hz).
+    /// The half-steps of the central differences for ∂u/∂Δt, seconds (see [`Terms`]): the
+    /// instrument's, and the Jacobian's (two of the estimate's periods more: other samples again).
     h: f64,
+    hw: f64,
 }
 
 /// One point of a window: reference position, the estimate's position ê, u = ê − R̂·D, ∂u/∂Δt
-/// (smoothed: the instrument) and exactly (the interpolant's slope), R̂, time.
+/// over ±h (the instrument) and over ±h_w (for the Newton Jacobian), R̂, time.
 struct Pt {
     r: Vector3<f64>,
     e: Vector3<f64>,
     u: Vector3<f64>,
     du: Vector3<f64>,
-    du_exact: Vector3<f64>,
+    dw: Vector3<f64>,
     rhat: Matrix3<f64>,
     t: f64,
 }
@@ -267,30 +272,29 @@ impl Problem<'_> {
         let m = shape.len();
         let p = m + if with_lever { 3 } else { 0 };
         let mut pts: Vec<Pt> = Vec::with_capacity(w.range.len());
-        let (mut h0, mut hm, mut hp) = (0usize, 0usize, 0usize);
+        let mut hints = [0usize; 5];
+        let (h, hw) = (self.h, self.hw);
         for i in w.range.clone() {
             let t = self.ref_t[i];
             let te = t - shape.value(theta, t);
-            // The hint of the first query of the window by bisection, the rest walk.
+            // The hints of the first query of the window by bisection, the rest walk.
             if pts.is_empty() {
-                let j = self.sampler.track.t.partition_point(|&x| x < te - self.h);
-                (h0, hm, hp) = (j, j, j);
+                hints = [self.sampler.track.t.partition_point(|&x| x < te - hw); 5];
             }
-            let (Some(a), Some(am), Some(ap)) = (
-                self.sampler.at(te, &mut h0),
-                self.sampler.at(te - self.h, &mut hm),
-                self.sampler.at(te + self.h, &mut hp),
-            ) else {
+            let mut at = |k: usize, dt: f64| self.sampler.at(te + dt, &mut hints[k]);
+            let (Some(a), Some(m1), Some(p1), Some(m2), Some(p2)) =
+                (at(0, 0.0), at(1, -h), at(2, h), at(3, -hw), at(4, hw))
+            else {
                 continue;
             };
-            let u = a.p - a.r * d;
-            let du = ((am.p - am.r * d) - (ap.p - ap.r * d)) / (2.0 * self.h);
+            let u = |x: &At| x.p - x.r * d;
             pts.push(Pt {
                 r: self.ref_p[i],
                 e: a.p,
-                u,
-                du,
-                du_exact: -(a.dp - a.dr * d),
+                u: u(&a),
+                // u(t − Δt) moves by −u̇ per second of Δt.
+                du: (u(&m1) - u(&p1)) / (2.0 * h),
+                dw: (u(&m2) - u(&p2)) / (2.0 * hw),
                 rhat: a.r,
                 t,
             });
@@ -381,10 +385,10 @@ impl Problem<'_> {
             ];
             shape.basis(q.t, &mut phi);
             let sdu = s * (rot * q.du);
-            let sdx = s * (rot * q.du_exact);
+            let sdw = s * (rot * q.dw);
             for (k, f) in phi.iter().enumerate() {
                 v[k] = sdu * *f;
-                x[k] = sdx * *f;
+                x[k] = sdw * *f;
             }
             if with_lever {
                 let sr = s * (rot * q.rhat);
@@ -523,6 +527,9 @@ pub struct PoseFit {
     pub rms_m: Vec<f64>,
     /// The mission's scale (estimate distances over reference distances, ≈ 1 + scale error).
     pub scale: f64,
+    /// The secant correction of the Jacobian's clock columns (see `solve`); the profile's windows
+    /// use it too.
+    pub jacobian_scale: f64,
     pub iterations: usize,
     pub converged: bool,
 }
@@ -554,7 +561,6 @@ pub struct PoseData<'a> {
 
 impl<'a> PoseData<'a> {
     fn problem(&self) -> Problem<'a> {
-        let n = self.estimate.t.len();
         let mut steps: Vec<f64> = self.estimate.t.windows(2).map(|w| w[1] - w[0]).collect();
         let period = if steps.is_empty() {
             0.01
@@ -562,7 +568,6 @@ impl<'a> PoseData<'a> {
             let mid = steps.len() / 2;
             *steps.select_nth_unstable_by(mid, f64::total_cmp).1
         };
-        let _ = n;
         Problem {
             ref_t: self.ref_t,
             ref_p: self.ref_p,
@@ -570,7 +575,8 @@ impl<'a> PoseData<'a> {
                 track: self.estimate,
                 gap: self.params.max_gap_s,
             },
-            h: (2.0 * period).clamp(0.01, 0.25),
+            h: (2.0 * period).clamp(STENCIL_MIN_S, STENCIL_MAX_S),
+            hw: (2.0 * period).clamp(STENCIL_MIN_S, STENCIL_MAX_S) + 2.0 * period,
         }
     }
 
@@ -591,8 +597,30 @@ pub fn fit(
     with_lever: bool,
 ) -> Option<PoseFit> {
     let problem = data.problem();
-    let mut kept: Vec<Window> = windows.to_vec();
-    let mut outliers: Vec<Window> = Vec::new();
+    // Windows whose residual at the start is an outlier already (a jump of the estimate in them)
+    // are left out before the first fit, so that they cannot drag it.
+    let at_start: Vec<Option<f64>> = windows
+        .par_iter()
+        .map(|w| {
+            problem
+                .terms(w, &shape, &theta0, &lever0, false, 1.0)
+                .map(|t| (t.rss / t.n as f64).sqrt())
+        })
+        .collect();
+    let mut rms: Vec<f64> = at_start.iter().flatten().copied().collect();
+    rms.sort_by(f64::total_cmp);
+    let median = rms.get(rms.len() / 2).copied().unwrap_or(f64::INFINITY);
+    let (mut kept, mut outliers): (Vec<Window>, Vec<Window>) = (Vec::new(), Vec::new());
+    for (w, r) in windows.iter().zip(&at_start) {
+        match r {
+            Some(r) if *r > OUTLIER_RMS_FACTOR * median => outliers.push(w.clone()),
+            _ => kept.push(w.clone()),
+        }
+    }
+    if kept.len() < 3 {
+        kept = windows.to_vec();
+        outliers.clear();
+    }
     let (mut theta, mut lever) = (theta0, lever0);
     for _round in 0..3 {
         let mut f = solve(&problem, &kept, &shape, theta.clone(), lever, with_lever)?;
@@ -651,9 +679,9 @@ fn solve(
             .fold((0.0, 0usize), |(r, n), t| (r + t.rss, n + t.n));
         rss / (3.0 * n.max(1) as f64) / (LEVER_PRIOR_M * LEVER_PRIOR_M)
     };
-    // The reduced equations summed over the windows, the lever's prior added: the Newton step
-    // −J⁻¹·g and the merit gᵀ·H⁻¹·g of the estimating equations g = 0.
-    let normal = |terms: &[Option<Terms>], d: &Vector3<f64>| {
+    // The reduced equations summed over the windows, the lever's prior (weight `l`) added: the
+    // Newton step −J⁻¹·g, the gradient and the scales of the merit.
+    let normal = |terms: &[Option<Terms>], d: &Vector3<f64>, l: f64, c: f64, lambda: f64| {
         let (mut h, mut j, mut g) = (
             DMatrix::<f64>::zeros(p, p),
             DMatrix::<f64>::zeros(p, p),
@@ -665,24 +693,36 @@ fn solve(
             g += &t.g;
         }
         if with_lever {
-            let l = lever_weight(terms);
             for c in 0..3 {
                 h[(m + c, m + c)] += l;
                 j[(m + c, m + c)] += l;
                 g[m + c] += l * d[c];
             }
         }
+        for k in 0..m {
+            j.column_mut(k).scale_mut(c);
+        }
+        // Levenberg–Marquardt: λ·diag(H) added, more of it after a failed step.
+        for k in 0..p {
+            j[(k, k)] += lambda * h[(k, k)];
+        }
         let step = j.lu().solve(&g).map(|x| -x);
         (step, g, h.diagonal())
     };
-    // The merit of the estimating equations: Σ g_k²/H_kk with the scales of the current iterate (the
-    // Newton direction −J⁻¹·g descends it).
+    // The merit of the estimating equations: Σ g_k²/H_kk with the current iterate's scales (the
+    // Newton direction descends it).
     let merit = |g: &DVector<f64>, scales: &DVector<f64>| {
         g.iter()
             .zip(scales.iter())
             .map(|(g, h)| if *h > 0.0 { g * g / h } else { 0.0 })
             .sum::<f64>()
     };
+    // The Jacobian's clock columns are a derivative over a wider stencil, which misses part of the
+    // fast motion (a gait) the residual follows: scaled by `c`, a secant correction learnt from
+    // successive steps (a step undone by the next one means the Jacobian was too small).
+    let mut c = 1.0;
+    let mut lambda = 1e-3;
+    let mut previous: Option<DVector<f64>> = None;
     for it in 0..MAX_ITERATIONS {
         iterations = it + 1;
         // The mission's scale from the windows' evidence, in the first iterations (the windows'
@@ -697,22 +737,34 @@ fn solve(
                 terms = eval(&theta, &d, s_bar);
             }
         }
-        let (Some(step), g0, scales) = normal(&terms, &d) else {
+        let l = lever_weight(&terms);
+        let (Some(mut step), g0, scales) = normal(&terms, &d, l, c, lambda) else {
             return None;
         };
+        // The secant correction, once the lever has settled, from a step that undoes part of the
+        // last (the Jacobian was too small).
+        if let (true, Some(last)) = (it >= 2, &previous) {
+            let (new, old) = (step.rows(0, m), last.rows(0, m));
+            let norm = old.dot(&old);
+            let rho = new.dot(&old) / norm;
+            if norm.sqrt() > 1e-5 && rho < 0.0 {
+                c = (c * (1.0 - rho)).clamp(1.0, 4.0);
+                if let (Some(s), ..) = normal(&terms, &d, l, c, lambda) {
+                    step = s;
+                }
+            }
+        }
         let before = merit(&g0, &scales);
-        let largest = (0..m).map(|k| step[k].abs()).fold(0.0, f64::max);
-        let scale = if largest > MAX_STEP_S {
-            MAX_STEP_S / largest
-        } else {
-            1.0
-        };
-        // The instrument is a smoothed derivative (see `Problem::h`), not the cost's exact
-        // gradient, so the steps solve the estimating equations g = 0: a step is kept when it
-        // lowers their merit, halved otherwise.
+        // The instrument is not the cost's exact gradient, so the steps solve the estimating
+        // equations g = 0: a step is kept when it lowers their merit; otherwise more damping.
         let mut accepted = false;
-        let mut a = scale;
-        for _ in 0..8 {
+        for _ in 0..10 {
+            let largest = (0..m).map(|k| step[k].abs()).fold(0.0, f64::max);
+            let a = if largest > MAX_STEP_S {
+                MAX_STEP_S / largest
+            } else {
+                1.0
+            };
             let t2: Vec<f64> = (0..m).map(|k| theta[k] + a * step[k]).collect();
             let d2 = if with_lever {
                 d + Vector3::new(step[m], step[m + 1], step[m + 2]) * a
@@ -720,30 +772,32 @@ fn solve(
                 d
             };
             let terms2 = eval(&t2, &d2, s_bar);
-            if terms2.iter().flatten().count() >= 3 {
-                let after = merit(&normal(&terms2, &d2).1, &scales);
-                {
-                    if after < before || after < 1e-12 {
-                        theta = t2;
-                        d = d2;
-                        terms = terms2;
-                        accepted = true;
-                        break;
-                    }
-                }
+            if terms2.iter().flatten().count() == terms.iter().flatten().count()
+                && merit(&normal(&terms2, &d2, l, c, 0.0).1, &scales) < before
+            {
+                theta = t2;
+                d = d2;
+                terms = terms2;
+                accepted = true;
+                step *= a;
+                lambda = (lambda / 3.0).max(1e-6);
+                break;
             }
-            a *= 0.5;
+            lambda *= 10.0;
+            match normal(&terms, &d, l, c, lambda) {
+                (Some(s), ..) => step = s,
+                _ => break,
+            }
         }
-        if std::env::var("POSE_DEBUG").is_ok() {
-            eprintln!("  it {it}: theta {:?} d {:?} merit {before:.3e} step {:?} accepted {accepted} a {a}", theta, d.as_slice(), step.as_slice());
-        }
-        let small = (0..m).all(|k| (a * step[k]).abs() < 2e-6)
-            && (!with_lever || (m..p).all(|k| (a * step[k]).abs() < 2e-5));
+        let small = (0..m).all(|k| step[k].abs() < 2e-6)
+            && (!with_lever || (m..p).all(|k| step[k].abs() < 2e-5));
         if !accepted || small {
             break;
         }
+        previous = Some(step);
     }
-    let remaining = normal(&terms, &d).0;
+    let l = lever_weight(&terms);
+    let remaining = normal(&terms, &d, l, c, 0.0).0;
     // The jackknife over windows: each left out by one Newton step of the reduced equations.
     let used: Vec<(&Window, &Terms)> = windows
         .iter()
@@ -757,15 +811,23 @@ fn solve(
         j += &t.j;
     }
     if with_lever {
-        let l = lever_weight(&terms);
         for c in 0..3 {
             h[(m + c, m + c)] += l;
             j[(m + c, m + c)] += l;
         }
     }
+    for k in 0..m {
+        j.column_mut(k).scale_mut(c);
+    }
     let deltas: Vec<DVector<f64>> = used
         .iter()
-        .filter_map(|(_, t)| (&j - &t.j).lu().solve(&t.g))
+        .filter_map(|(_, t)| {
+            let mut tj = t.j.clone();
+            for k in 0..m {
+                tj.column_mut(k).scale_mut(c);
+            }
+            (&j - tj).lu().solve(&t.g)
+        })
         .collect();
     if deltas.len() < 3 {
         return None;
@@ -779,10 +841,11 @@ fn solve(
     }
     cov *= (kf - 1.0) / kf;
     let sig = |i: usize| cov[(i, i)].max(0.0).sqrt();
-    // Converged: the Newton step left is negligible beside the parameters' own uncertainty.
+    // Converged: the Newton step left is small beside the parameters' own uncertainty (the
+    // estimating equations are as rough as their noise at that scale).
     if let Some(step) = remaining {
-        converged = (0..m).all(|k| step[k].abs() <= (0.2 * sig(k)).max(1e-4))
-            && (!with_lever || (m..p).all(|k| step[k].abs() <= (0.2 * sig(k)).max(1e-3)));
+        converged = (0..m).all(|k| step[k].abs() <= (0.5 * sig(k)).max(1e-4))
+            && (!with_lever || (m..p).all(|k| step[k].abs() <= (0.5 * sig(k)).max(1e-3)));
     }
     let variance_inflation = if with_lever {
         // Var(θ₀) with D free over Var(θ₀) with D held, from the normal equations.
@@ -807,6 +870,7 @@ fn solve(
             .map(|(_, t)| (t.rss / t.n as f64).sqrt())
             .collect(),
         scale: s_bar,
+        jacobian_scale: c,
         iterations,
         converged: converged && k >= 3,
     })
@@ -831,7 +895,7 @@ pub fn profile(
     data: &PoseData<'_>,
     windows: &[Window],
     lever: Vector3<f64>,
-    scale: f64,
+    (scale, c): (f64, f64),
     start: &(dyn Fn(f64) -> f64 + Sync),
     search_s: f64,
 ) -> Vec<WindowOffset> {
@@ -846,7 +910,7 @@ pub fn profile(
             if terms.h[(0, 0)] <= 0.0 || terms.j[(0, 0)] <= 0.0 {
                 return None;
             }
-            let step = (-terms.g[0] / terms.j[(0, 0)]).clamp(-MAX_STEP_S, MAX_STEP_S);
+            let step = (-terms.g[0] / (c * terms.j[(0, 0)])).clamp(-MAX_STEP_S, MAX_STEP_S);
             let before = merit(&terms);
             let mut a = 1.0;
             let mut next = None;
@@ -854,7 +918,7 @@ pub fn profile(
                 if let Some(t2) =
                     problem.terms(w, &shape, &[theta + a * step], &lever, false, scale)
                 {
-                    if t2.h[(0, 0)] > 0.0 && (merit(&t2) < before || merit(&t2) < 1e-14) {
+                    if t2.n == terms.n && t2.h[(0, 0)] > 0.0 && merit(&t2) < before {
                         next = Some((theta + a * step, t2));
                         break;
                     }
@@ -868,12 +932,12 @@ pub fn profile(
                 break;
             }
         }
-        // Not a root of the window's equation (the step left is not negligible beside the window's
-        // own least-squares error): no answer.
-        let Some(formal) = formal_sigma(&terms) else {
+        // Not a root of the window's equation (the step left exceeds the window's own error, within
+        // which its estimating equation is as rough as its noise): no answer.
+        let Some(formal) = formal_sigma(&terms, c) else {
             return None;
         };
-        if (terms.g[0] / terms.j[(0, 0)]).abs() > (0.2 * formal).max(1e-4) {
+        if (terms.g[0] / (c * terms.j[(0, 0)])).abs() > formal.max(1e-4) {
             return None;
         }
         Some((theta, terms))
@@ -920,7 +984,7 @@ pub fn profile(
             Some(WindowOffset {
                 t: w.t(),
                 offset_s: theta,
-                formal_sigma_s: formal_sigma(&t)?,
+                formal_sigma_s: formal_sigma(&t, c)?,
                 rms_m: (t.rss / t.n as f64).sqrt(),
                 quality: if t.s_rr > 0.0 {
                     (1.0 - t.rss / t.s_rr).clamp(0.0, 1.0)
@@ -932,12 +996,12 @@ pub fn profile(
         .collect()
 }
 
-/// A window's least-squares error of its one offset, seconds: σ̂·√H/J (the instrumental-variable
-/// form; σ̂² the residual per degree of freedom: 3 per point less the 8 of the similarity and drift
+/// A window's least-squares error of its one offset, seconds: σ̂·√H/(c·J) (the instrumental-variable
+/// form, c the whole fit's secant correction; σ̂² the residual per degree of freedom: 3 per point less the 8 of the similarity and drift
 /// and the offset).
-fn formal_sigma(t: &Terms) -> Option<f64> {
+fn formal_sigma(t: &Terms, c: f64) -> Option<f64> {
     let dof = (3 * t.n) as f64 - 9.0;
-    let (h, j) = (t.h[(0, 0)], t.j[(0, 0)]);
+    let (h, j) = (t.h[(0, 0)], c * t.j[(0, 0)]);
     if dof <= 0.0 || h <= 0.0 || j <= 0.0 {
         return None;
     }
@@ -945,11 +1009,13 @@ fn formal_sigma(t: &Terms) -> Option<f64> {
 }
 
 /// f of the module doc: the factor that makes the windows' σ match their scatter about the line
-/// through their neighbours (Winsorized at [`WINSOR_CHI2`], iterated to its fixed point). 1 with
-/// fewer than three windows.
+/// through their neighbours, from a clipped mean: terms beyond [`CLIP_CHI2`] (4σ) of the current
+/// factor are set aside (a step spoils two, a window in another basin three) and the mean of the
+/// others, over what the clip leaves of a unit normal's square, gives the next factor; started from
+/// the median (robust), iterated to its fixed point. 1 with fewer than three terms.
 pub fn scatter_factor(w: &[(f64, f64, f64)]) -> f64 {
     // (t, offset, σ) in time order.
-    let mut terms: Vec<(f64, f64)> = Vec::new();
+    let mut terms: Vec<f64> = Vec::new();
     for k in 1..w.len().saturating_sub(1) {
         let (t0, d0, s0) = w[k - 1];
         let (t1, d1, s1) = w[k];
@@ -962,21 +1028,26 @@ pub fn scatter_factor(w: &[(f64, f64, f64)]) -> f64 {
         let e = d1 - (a * d0 + b * d2);
         let v = s1 * s1 + a * a * s0 * s0 + b * b * s2 * s2;
         if v > 0.0 {
-            terms.push((e * e, v));
+            terms.push(e * e / v);
         }
     }
     if terms.len() < 3 {
         return 1.0;
     }
-    let mut f2 = 1.0;
-    for _ in 0..30 {
-        let mean = terms
+    let mut sorted = terms.clone();
+    sorted.sort_by(f64::total_cmp);
+    let mut f2 = (sorted[sorted.len() / 2] / CHI2_1_MEDIAN).max(1e-12);
+    for _ in 0..50 {
+        let kept: Vec<f64> = terms
             .iter()
-            .map(|(e2, v)| (e2 / (v * f2)).min(WINSOR_CHI2))
-            .sum::<f64>()
-            / terms.len() as f64;
-        let next = f2 * mean / WINSOR_MEAN;
-        if (next - f2).abs() < 1e-6 * f2 {
+            .copied()
+            .filter(|c| *c <= CLIP_CHI2 * f2)
+            .collect();
+        if kept.is_empty() {
+            break;
+        }
+        let next = kept.iter().sum::<f64>() / kept.len() as f64 / CLIPPED_MEAN;
+        if (next - f2).abs() <= 1e-9 * f2 {
             f2 = next;
             break;
         }

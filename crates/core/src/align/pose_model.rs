@@ -42,8 +42,11 @@ pub const WINDOW_SEARCH_S: f64 = 3.0;
 pub struct PoseClock {
     pub profile: OffsetProfile,
     pub model: ClockModel,
-    /// The final fit (the chosen model's parameters, the lever, the windows used).
-    pub fit: PoseFit,
+    /// The final fit (the chosen model's parameters, the lever, the windows used); `None` when it did
+    /// not converge and the model's parameters are the windows'.
+    pub fit: Option<PoseFit>,
+    /// The lever used and its σ (estimate body frame, metres).
+    pub lever: (Vector3<f64>, Option<Vector3<f64>>),
     /// The whole-mission constant fit's Δt and σ (what step 1 found).
     pub whole: (f64, f64),
     /// Windows left out of the whole-mission fit (their residual far above the others').
@@ -78,84 +81,80 @@ pub fn pose_clock_model(
         vec![start_s],
         Vector3::zeros(),
         true,
-    )?;
-    if std::env::var("POSE_DEBUG").is_ok() {
-        eprintln!(
-            "whole: theta {:?} ± {:?} lever {:?} converged {} iterations {} windows {} outliers {} vif {:.1} rms {:?}",
-            whole.theta, whole.theta_sigma, whole.lever_m, whole.converged, whole.iterations, whole.windows.len(), whole.outliers.len(), whole.variance_inflation, whole.rms_m
-        );
-    }
-    if !whole.converged || (whole.theta[0] - start_s).abs() > MAX_DISAGREEMENT_S {
-        return None;
-    }
-    let offset0 = whole.theta[0];
-    let raw = pose_fit::profile(
-        &data,
-        &windows,
-        whole.lever_m,
-        whole.scale,
-        &|_| offset0,
-        WINDOW_SEARCH_S,
-    );
-    let raw = consistent_windows(raw);
-    if raw.len() < 3 {
-        return None;
-    }
-    let f = pose_fit::scatter_factor(
-        &raw.iter()
-            .map(|w| (w.t, w.offset_s, w.formal_sigma_s))
-            .collect::<Vec<_>>(),
     )
-    // The formal σ assumes independent residuals; real ones are correlated (gait, drift, slow GNSS
-    // errors), so the windows scatter at least as much as it says: a factor below 1 is chance
-    // (few windows), not evidence.
-    .max(1.0);
-    if std::env::var("POSE_DEBUG").is_ok() {
-        eprintln!("scatter factor {f:.2}");
-        for w in &raw {
-            eprintln!(
-                "  raw t {:7.1} offset {:+.5} formal {:.5} rms {:.4} q {:.4}",
-                w.t, w.offset_s, w.formal_sigma_s, w.rms_m, w.quality
-            );
+    .filter(|w| w.converged && (w.theta[0] - start_s).abs() <= MAX_DISAGREEMENT_S);
+    // Without a whole-mission constant fit (a step or a large drift spoils it), the profile starts
+    // without a lever from the signal searches' answer, each window searching its own.
+    let (mut lever, mut scale) = whole.as_ref().map_or((Vector3::zeros(), (1.0, 1.0)), |w| {
+        (w.lever_m, (w.scale, w.jacobian_scale))
+    });
+    let mut clock = (
+        ClockShape::Constant,
+        vec![whole.as_ref().map_or(start_s, |w| w.theta[0])],
+    );
+    let mut pass = 0;
+    let (profile, mut model, last) = loop {
+        pass += 1;
+        let (shape, theta) = &clock;
+        let raw = pose_fit::profile(
+            &data,
+            &windows,
+            lever,
+            scale,
+            &|t| shape.value(theta, t),
+            WINDOW_SEARCH_S,
+        );
+        let profile = calibrated_profile(consistent_windows(raw), &windows)?;
+        let (offset0, whole_sigma) = match &whole {
+            Some(w) => (w.theta[0], w.theta_sigma[0].max(POSE_SIGMA_FLOOR_S)),
+            None => (theta[0], f64::INFINITY),
+        };
+        let model = choose_model(&profile, (offset0, whole_sigma), signals, forced);
+        // The chosen model's parameters fitted with the lever over every window, σ by the
+        // jackknife over windows.
+        let (next_shape, theta0) = shape_of(&model, offset0);
+        // A window holding a change of a piecewise clock mixes two offsets: left out of its fit.
+        let kept: Vec<pose_fit::Window> = match &next_shape {
+            ClockShape::Piecewise { changes } => windows
+                .iter()
+                .filter(|w| !changes.iter().any(|&c| c > w.t_start && c < w.t_end))
+                .cloned()
+                .collect(),
+            _ => windows.clone(),
+        };
+        let last = match (&whole, model.model) {
+            (Some(w), OffsetModel::Constant) => Some(w.clone()),
+            _ => pose_fit::fit(&data, &kept, next_shape.clone(), theta0, lever, true)
+                .filter(|f| f.converged),
+        };
+        // A model other than the constant was chosen on windows whose lever came from a constant
+        // fit (or none): the profile is measured again with the lever of the chosen model.
+        if let (1, Some(l)) = (pass, &last) {
+            if model.model != OffsetModel::Constant || whole.is_none() {
+                lever = l.lever_m;
+                scale = (l.scale, l.jacobian_scale);
+                clock = (next_shape, l.theta.clone());
+                continue;
+            }
         }
-    }
-    let window_s = windows[0].t_end - windows[0].t_start;
-    let profile = OffsetProfile {
-        method: OffsetMethod::Pose,
-        window_s,
-        step_s: window_s,
-        sigma_scale: f,
-        windows: raw
-            .iter()
-            .map(|w| ProfileWindow {
-                t: w.t,
-                offset_s: w.offset_s,
-                sigma_s: (w.formal_sigma_s * f).max(POSE_SIGMA_FLOOR_S),
-                correlation: w.quality,
-                usable: true,
-            })
-            .collect(),
+        break (profile, model, last);
     };
-    let whole_sigma = whole.theta_sigma[0].max(POSE_SIGMA_FLOOR_S);
-    let mut model = choose_model(&profile, (offset0, whole_sigma), signals, forced);
-    // The final fit of the chosen model, lever included, σ by the jackknife over windows.
-    let (shape, theta0) = match model.model {
-        OffsetModel::Constant => (ClockShape::Constant, vec![offset0]),
-        OffsetModel::Linear => (
-            ClockShape::Linear { t_mid: model.t_mid },
-            vec![model.offset_s, -model.drift_ppm.unwrap_or(0.0) * 1e-6],
-        ),
-        OffsetModel::Piecewise => (
-            ClockShape::Piecewise {
-                changes: model.segments.iter().skip(1).map(|s| s.t_start).collect(),
-            },
-            model.segments.iter().map(|s| s.offset_s).collect(),
-        ),
-    };
-    let last = if model.model == OffsetModel::Constant {
-        whole.clone()
-    } else {
-        pose_fit::fit(&data, &windows, shape, theta0, whole.lever_m, true)?
+    // Without a converged fit of the chosen model, its parameters stay those of the windows.
+    let Some(last) = last else {
+        if model.model == OffsetModel::Constant {
+            let (mean, sigma) = weighted_mean(&profile);
+            model.offset_s = mean;
+            model.sigma_s = sigma;
+        }
+        model.describe();
+        return Some(PoseClock {
+            outlier_windows: 0,
+            whole: (model.offset_s, model.sigma_s),
+            fit: None,
+            profile,
+            model,
+            lever: (lever, None),
+        });
     };
     let sigma = |k: usize| last.theta_sigma[k].max(POSE_SIGMA_FLOOR_S);
     match model.model {
@@ -199,12 +198,75 @@ pub fn pose_clock_model(
     Some(PoseClock {
         profile,
         model,
-        outlier_windows: whole.outliers.len(),
-        whole: (offset0, whole_sigma),
-        fit: last,
+        outlier_windows: last.outliers.len(),
+        whole: (last.theta[0], last.theta_sigma[0]),
+        lever: (last.lever_m, last.lever_sigma_m),
+        fit: Some(last),
     })
 }
 
+/// The clock shape of `model` and its parameters to start from.
+fn shape_of(model: &ClockModel, offset0: f64) -> (ClockShape, Vec<f64>) {
+    match model.model {
+        OffsetModel::Constant => (ClockShape::Constant, vec![offset0]),
+        OffsetModel::Linear => (
+            ClockShape::Linear { t_mid: model.t_mid },
+            vec![model.offset_s, -model.drift_ppm.unwrap_or(0.0) * 1e-6],
+        ),
+        OffsetModel::Piecewise => (
+            ClockShape::Piecewise {
+                changes: model.segments.iter().skip(1).map(|s| s.t_start).collect(),
+            },
+            model.segments.iter().map(|s| s.offset_s).collect(),
+        ),
+    }
+}
+
+/// The profile of the windows' offsets, their σ scaled by the scatter factor; `None` with fewer than
+/// three windows.
+fn calibrated_profile(
+    raw: Vec<pose_fit::WindowOffset>,
+    windows: &[pose_fit::Window],
+) -> Option<OffsetProfile> {
+    if raw.len() < 3 {
+        return None;
+    }
+    let f = pose_fit::scatter_factor(
+        &raw.iter()
+            .map(|w| (w.t, w.offset_s, w.formal_sigma_s))
+            .collect::<Vec<_>>(),
+    )
+    // The formal σ assumes independent residuals; real ones are correlated (gait, drift, slow GNSS
+    // errors), so the windows scatter at least as much as it says: a factor below 1 is chance
+    // (few windows), not evidence.
+    .max(1.0);
+    let window_s = windows[0].t_end - windows[0].t_start;
+    // A window whose σ is many times the typical one weighs nothing in any fit and pins nothing:
+    // left out of the profile.
+    let sigmas: Vec<f64> = raw.iter().map(|w| w.formal_sigma_s).collect();
+    let typical = crate::align::offset_profile::median(&sigmas).unwrap_or(f64::INFINITY);
+    Some(OffsetProfile {
+        method: OffsetMethod::Pose,
+        window_s,
+        step_s: window_s,
+        sigma_scale: f,
+        windows: raw
+            .iter()
+            .filter(|w| w.formal_sigma_s <= MAX_SIGMA_RATIO * typical)
+            .map(|w| ProfileWindow {
+                t: w.t,
+                offset_s: w.offset_s,
+                sigma_s: (w.formal_sigma_s * f).max(POSE_SIGMA_FLOOR_S),
+                correlation: w.quality,
+                usable: true,
+            })
+            .collect(),
+    })
+}
+
+/// A window whose σ exceeds the median window's this many times is left out of the profile (its
+/// weight in any fit is under 1 %).
+pub const MAX_SIGMA_RATIO: f64 = 10.0;
 /// A window's fit must explain this share of its reference's motion (1 − RSS/Σ|p − p̄|²): below it,
 /// the reference barely moved (a stop, a turn in place) and the window says nothing about timing.
 pub const MIN_WINDOW_QUALITY: f64 = 0.5;
@@ -240,6 +302,25 @@ fn consistent_windows(raw: Vec<pose_fit::WindowOffset>) -> Vec<pose_fit::WindowO
         .filter(|(_, d)| *d <= NEIGHBOUR_OUTLIER * typical)
         .map(|(w, _)| w)
         .collect()
+}
+
+/// The weighted mean of the usable windows' offsets and its σ, raised by their scatter about it
+/// where that exceeds their σ.
+fn weighted_mean(p: &OffsetProfile) -> (f64, f64) {
+    let w = p.usable();
+    let (mut s, mut sy) = (0.0, 0.0);
+    for x in &w {
+        let q = 1.0 / (x.sigma_s * x.sigma_s);
+        s += q;
+        sy += q * x.offset_s;
+    }
+    let mean = sy / s;
+    let chi2: f64 = w
+        .iter()
+        .map(|x| ((x.offset_s - mean) / x.sigma_s).powi(2))
+        .sum();
+    let birge = (chi2 / (w.len() as f64 - 1.0).max(1.0)).sqrt().max(1.0);
+    (mean, birge / s.sqrt())
 }
 
 /// The weighted standard deviation of the usable windows' times, seconds.
