@@ -782,9 +782,10 @@ pub struct OffsetArgs {
 
 #[derive(Debug, Args)]
 pub struct ValidateArgs {
-    /// Missions of each kind.
-    #[arg(long, value_name = "N", default_value_t = 10)]
-    pub missions: usize,
+    /// Missions of each kind (1–10000).
+    #[arg(long, value_name = "N", default_value_t = 10,
+          value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub missions: u32,
     /// Only these kinds (comma-separated): ground, legged, near_straight, turns_in_place,
     /// gnss_outages, receipt_stamps, position_jumps, drift, short_drift, step.
     #[arg(long, value_name = "KIND,...", value_delimiter = ',')]

@@ -288,7 +288,7 @@ fn evaluate_estimate(
                     // `auto` refines its answer by the pose fit when the estimate has orientations.
                     let orientations = est.trajectory.orientations.as_deref();
                     let posed = match orientations {
-                        Some(q) if config.offset_method == OffsetMethod::Auto => {
+                        Some(q) if config.params.offset_method() == OffsetMethod::Auto => {
                             pose_over_time(config, &params, &pair, q, &o, &est.name, t0_ns)
                         }
                         _ => None,
@@ -555,22 +555,22 @@ fn pose_over_time(
     let pc = pose_clock_model(
         &data,
         o.offset_s,
-        &config.offset_profile,
+        &config.params.offset_profile(),
         views,
-        config.offset_model,
+        config.params.forced_offset_model(),
     )?;
     let t0_s = t0_ns as f64 * 1e-9;
     let model = &pc.model;
     let mut warnings = Vec::new();
-    if config.offset_model.is_none() {
+    if config.params.forced_offset_model().is_none() {
         let code = match model.model {
-            OffsetModel::Linear => Some("clock_drift_suspected"),
-            OffsetModel::Piecewise => Some("clock_step_suspected"),
+            OffsetModel::Linear => Some(WarningCode::ClockDriftSuspected),
+            OffsetModel::Piecewise => Some(WarningCode::ClockStepSuspected),
             OffsetModel::Constant => None,
         };
         if let Some(code) = code {
             warnings.push(Warning {
-                code: code.into(),
+                code,
                 message: format!(
                     "{name}: the clock offset is not constant — {}; the estimate's stamps were corrected by this model (force one with --offset-model)",
                     model.reason
@@ -601,7 +601,7 @@ fn pose_over_time(
         );
     }
     let entry = OffsetMethodReport {
-        method: OffsetMethod::Pose.as_str().into(),
+        method: OffsetMethod::Pose,
         offset_s: Some(pc.whole.0),
         correlation: crate::align::offset_profile::median(
             &pc.profile
@@ -611,7 +611,7 @@ fn pose_over_time(
                 .collect::<Vec<_>>(),
         ),
         confidence: None,
-        status: "ok".into(),
+        status: MethodStatus::Ok,
         error: None,
         margin: None,
         defined_fraction: None,

@@ -11,10 +11,11 @@
 use rayon::prelude::*;
 
 use crate::align::clock_model::OffsetModel;
+use crate::diag::WarningCode;
 use crate::error::Result;
 use crate::eval::config::{EvalConfig, NamedInput};
 use crate::eval::inputs::{Inputs, Loaded};
-use crate::report::json::{Report, TimeOffsetReport};
+use crate::report::json::{OffsetSource, Report, TimeOffsetReport, TimeOffsetStatus};
 use crate::simulate::scenario::{MissionKind, Scenario, START_NS};
 use crate::trajectory::Trajectory;
 
@@ -90,9 +91,12 @@ pub struct MissionGrade {
     pub ref_rate_hz: f64,
     pub est_rate_hz: f64,
     pub est_lever_m: [f64; 3],
-    /// `ok`, `weak`, or the evaluation's error.
-    pub status: String,
-    pub method: String,
+    /// `ok` or `weak`; absent when the evaluation failed (`error` says why).
+    pub status: Option<TimeOffsetStatus>,
+    /// The evaluation's error, if it failed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+    pub method: Option<OffsetSource>,
     pub model: Option<OffsetModel>,
     /// The headline Δt's error against the truth at the time it states (constant: the truth at the
     /// middle of the overlap; linear: at `t_mid`; piecewise: the longest segment's), seconds.
@@ -110,7 +114,7 @@ pub struct MissionGrade {
     /// Steps: the located change time's error (s) and the segments' largest error (s).
     pub step_time_error_s: Option<f64>,
     pub step_segment_error_s: Option<f64>,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<WarningCode>,
 }
 
 /// Evaluates `reference` and `estimate` (stamps in ns, the estimate on its own clock) with every
@@ -160,7 +164,7 @@ pub fn grade(truth: &dyn ClockTruth, report: &Report, t0_s: f64) -> MissionGrade
         (Some(f), Some(l), Some(w)) => (f.t - t0_s - 0.5 * w, l.t - t0_s + 0.5 * w),
         _ => (0.0, 0.0),
     };
-    let ok = o.status == "ok";
+    let ok = o.status == TimeOffsetStatus::Ok;
     let headline_t = match o.model {
         Some(OffsetModel::Linear) => o.t_mid.map_or(0.5 * (a + b), |t| t - t0_s),
         Some(OffsetModel::Piecewise) => o
@@ -195,7 +199,7 @@ pub fn grade(truth: &dyn ClockTruth, report: &Report, t0_s: f64) -> MissionGrade
         }
         _ => (None, None),
     };
-    let warnings: Vec<String> = report.warnings.iter().map(|w| w.code.clone()).collect();
+    let codes: Vec<WarningCode> = report.warnings.iter().map(|w| w.code).collect();
     MissionGrade {
         kind: String::new(),
         seed: 0,
@@ -203,23 +207,27 @@ pub fn grade(truth: &dyn ClockTruth, report: &Report, t0_s: f64) -> MissionGrade
         ref_rate_hz: 0.0,
         est_rate_hz: 0.0,
         est_lever_m: [0.0; 3],
-        status: o.status.clone(),
-        method: o.method.clone(),
+        status: Some(o.status),
+        error: None,
+        method: Some(o.method),
         model: o.model,
         error_s,
         sigma_s: o.sigma_s,
         spread_s,
         windows,
-        clock_alarm: warnings
-            .iter()
-            .any(|w| w == "clock_drift_suspected" || w == "clock_step_suspected"),
+        clock_alarm: codes.iter().any(|w| {
+            matches!(
+                w,
+                WarningCode::ClockDriftSuspected | WarningCode::ClockStepSuspected
+            )
+        }),
         drift_true_ppm: truth.drift_ppm(),
         drift_ppm: o.drift_ppm,
         drift_measured_ppm: o.drift_measured_ppm,
         drift_resolution_ppm: o.drift_resolution_ppm,
         step_time_error_s,
         step_segment_error_s,
-        warnings,
+        warnings: codes,
     }
 }
 
@@ -237,8 +245,9 @@ pub fn run_one(kind: MissionKind, seed: u64) -> MissionGrade {
             ref_rate_hz: 0.0,
             est_rate_hz: 0.0,
             est_lever_m: [0.0; 3],
-            status: format!("error: {e}"),
-            method: String::new(),
+            status: None,
+            error: Some(e.to_string()),
+            method: None,
             model: None,
             error_s: None,
             sigma_s: None,
@@ -344,7 +353,7 @@ pub fn calibration(grades: &[&MissionGrade]) -> Calibration {
     };
     let w: Vec<(f64, f64)> = grades
         .iter()
-        .filter(|g| g.status == "ok")
+        .filter(|g| g.status == Some(TimeOffsetStatus::Ok))
         .flat_map(|g| g.windows.iter().map(|w| (w.error_s, w.sigma_s)))
         .collect();
     Calibration {

@@ -37,3 +37,4 @@ mod throughput_results;
 mod time_offset;
 mod time_offset_auto;
 mod time_offset_profile;
+mod validate;

@@ -3,10 +3,9 @@
 
 use anyhow::Result;
 
-use trajdrift::report::output::write_output;
-use trajdrift::validate::{table, ValidateOptions};
-
+use trajdrift::output::{is_stdout, write_json, OutputGuard};
 use trajdrift::simulate::scenario::MissionKind;
+use trajdrift::validate::{table, ValidateOptions};
 
 use crate::cli::args::ValidateArgs;
 use crate::cli::progress::ReadProgress;
@@ -14,8 +13,13 @@ use crate::cli::{emit, EXIT_OK};
 
 /// Runs the command; returns the exit code.
 pub fn run(a: ValidateArgs) -> Result<u8> {
+    // The output claimed before any mission is simulated.
+    let mut guard = OutputGuard::default();
+    if let Some(path) = &a.json {
+        guard.claim("--json", path)?;
+    }
     let options = ValidateOptions {
-        per_kind: a.missions,
+        per_kind: a.missions as usize,
         kinds: a.kind.clone(),
         first_seed: a.seed,
     };
@@ -29,11 +33,10 @@ pub fn run(a: ValidateArgs) -> Result<u8> {
     let grades = trajdrift::validate::run(&options, &|_, _| bar.inc());
     bar.finish();
     if let Some(path) = &a.json {
-        let mut bytes = serde_json::to_vec_pretty(&grades)?;
-        bytes.push(b'\n');
-        write_output(path, &bytes)?;
+        guard.check("--json", path)?;
+        write_json(path, &grades)?;
     }
-    if a.json.as_deref().is_none_or(|p| p.as_os_str() != "-") {
+    if !a.json.as_deref().is_some_and(is_stdout) {
         emit(&table(&grades))?;
     }
     Ok(EXIT_OK)

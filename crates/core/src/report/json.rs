@@ -290,6 +290,8 @@ pub enum OffsetSource {
     Speed,
     SignedCurvature,
     Curvature,
+    /// `auto`'s answer refined by the pose fit (see [`crate::align::pose_fit`]).
+    Pose,
 }
 
 impl From<OffsetMethod> for OffsetSource {
@@ -299,6 +301,7 @@ impl From<OffsetMethod> for OffsetSource {
             OffsetMethod::Speed => OffsetSource::Speed,
             OffsetMethod::SignedCurvature => OffsetSource::SignedCurvature,
             OffsetMethod::Curvature => OffsetSource::Curvature,
+            OffsetMethod::Pose => OffsetSource::Pose,
         }
     }
 }
@@ -317,6 +320,7 @@ impl OffsetSource {
             OffsetSource::Speed => Some(OffsetMethod::Speed),
             OffsetSource::SignedCurvature => Some(OffsetMethod::SignedCurvature),
             OffsetSource::Curvature => Some(OffsetMethod::Curvature),
+            OffsetSource::Pose => Some(OffsetMethod::Pose),
         }
     }
 }
