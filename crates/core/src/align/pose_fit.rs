@@ -627,7 +627,8 @@ pub fn fit(
         let mut rms = f.rms_m.clone();
         rms.sort_by(f64::total_cmp);
         let median = rms[rms.len() / 2];
-        let (bad, good): (Vec<(Window, f64)>, Vec<(Window, f64)>) = f
+        type Scored = Vec<(Window, f64)>;
+        let (bad, good): (Scored, Scored) = f
             .windows
             .iter()
             .cloned()
@@ -934,9 +935,7 @@ pub fn profile(
         }
         // Not a root of the window's equation (the step left exceeds the window's own error, within
         // which its estimating equation is as rough as its noise): no answer.
-        let Some(formal) = formal_sigma(&terms, c) else {
-            return None;
-        };
+        let formal = formal_sigma(&terms, c)?;
         if (terms.g[0] / (c * terms.j[(0, 0)])).abs() > formal.max(1e-4) {
             return None;
         }

@@ -156,6 +156,24 @@ pub fn pose_clock_model(
             lever: (lever, None),
         });
     };
+    // A drift is declared only when the fitted drift exceeds the resolution of the windows (the
+    // drift their calibrated σ can tell from a constant clock): below it the data do not refute the
+    // constant, whatever the windows' BIC said (receipt-stamp latencies or a gait tilt a few
+    // windows). The constant's σ then covers the drift it may hide (see the module doc).
+    let mut last = last;
+    if forced.is_none() && model.model == OffsetModel::Linear {
+        let fitted_ppm = -last.theta[1] * 1e6;
+        if let (Some(resolution), Some(w)) = (model.drift_resolution_ppm, &whole) {
+            if fitted_ppm.abs() < resolution {
+                model.model = OffsetModel::Constant;
+                model.criterion = format!(
+                    "{}; the fitted drift {fitted_ppm:+.1} ppm is below the resolution {resolution:.1} ppm",
+                    model.criterion
+                );
+                last = w.clone();
+            }
+        }
+    }
     let sigma = |k: usize| last.theta_sigma[k].max(POSE_SIGMA_FLOOR_S);
     match model.model {
         OffsetModel::Constant => {
