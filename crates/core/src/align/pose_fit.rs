@@ -584,6 +584,33 @@ impl<'a> PoseData<'a> {
     pub fn windows(&self) -> Vec<Window> {
         windows(self.ref_t, self.params.window_s)
     }
+
+    /// The profile's windows: those of [`Self::windows`] (disjoint), or with `step_s` shorter than
+    /// their length, windows of the same length every `step_s` seconds (overlapping).
+    pub fn profile_windows(&self, step_s: Option<f64>) -> Vec<Window> {
+        let disjoint = self.windows();
+        let (Some(step), Some(first), Some(last)) = (step_s, disjoint.first(), disjoint.last())
+        else {
+            return disjoint;
+        };
+        let len = first.t_end - first.t_start;
+        if step >= len {
+            return disjoint;
+        }
+        let (a, b) = (first.t_start, last.t_end);
+        let count = ((b - a - len) / step).floor().max(0.0) as usize + 1;
+        (0..count)
+            .map(|k| {
+                let (lo, hi) = (a + k as f64 * step, (a + k as f64 * step + len).min(b));
+                Window {
+                    range: self.ref_t.partition_point(|&t| t < lo)
+                        ..self.ref_t.partition_point(|&t| t < hi),
+                    t_start: lo,
+                    t_end: hi,
+                }
+            })
+            .collect()
+    }
 }
 
 /// Fits the clock `shape` (from `theta0`) and, when `with_lever`, the lever (from `lever0`) over

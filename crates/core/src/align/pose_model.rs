@@ -74,6 +74,8 @@ pub fn pose_clock_model(
     if windows.len() < 3 {
         return None;
     }
+    // The profile's windows: the fits' own (disjoint), or every `--offset-step` seconds.
+    let profile_windows = data.profile_windows(profile_params.step_s);
     let whole = pose_fit::fit(
         &data,
         &windows,
@@ -98,13 +100,13 @@ pub fn pose_clock_model(
         let (shape, theta) = &clock;
         let raw = pose_fit::profile(
             &data,
-            &windows,
+            &profile_windows,
             lever,
             scale,
             &|t| shape.value(theta, t),
             WINDOW_SEARCH_S,
         );
-        let profile = calibrated_profile(consistent_windows(raw), &windows)?;
+        let profile = calibrated_profile(consistent_windows(raw), &profile_windows)?;
         let (offset0, whole_sigma) = match &whole {
             Some(w) => (w.theta[0], w.theta_sigma[0].max(POSE_SIGMA_FLOOR_S)),
             None => (theta[0], f64::INFINITY),
@@ -249,16 +251,27 @@ fn calibrated_profile(
     if raw.len() < 3 {
         return None;
     }
-    let f = pose_fit::scatter_factor(
-        &raw.iter()
-            .map(|w| (w.t, w.offset_s, w.formal_sigma_s))
-            .collect::<Vec<_>>(),
-    )
-    // The formal σ assumes independent residuals; real ones are correlated (gait, drift, slow GNSS
-    // errors), so the windows scatter at least as much as it says: a factor below 1 is chance
-    // (few windows), not evidence.
-    .max(1.0);
     let window_s = windows[0].t_end - windows[0].t_start;
+    let step_s = windows
+        .get(1)
+        .map_or(window_s, |w| (w.t_start - windows[0].t_start).min(window_s));
+    // The scatter factor from windows that do not overlap (every window of a disjoint profile; one
+    // a window's length apart of an overlapping one): overlapping neighbours share samples and
+    // would scatter less than their σ says.
+    let mut independent: Vec<(f64, f64, f64)> = Vec::new();
+    for w in &raw {
+        if independent
+            .last()
+            .is_none_or(|last| w.t - last.0 >= 0.999 * window_s)
+        {
+            independent.push((w.t, w.offset_s, w.formal_sigma_s));
+        }
+    }
+    let f = pose_fit::scatter_factor(&independent)
+        // The formal σ assumes independent residuals; real ones are correlated (gait, drift, slow GNSS
+        // errors), so the windows scatter at least as much as it says: a factor below 1 is chance
+        // (few windows), not evidence.
+        .max(1.0);
     // A window whose σ is many times the typical one weighs nothing in any fit and pins nothing:
     // left out of the profile.
     let sigmas: Vec<f64> = raw.iter().map(|w| w.formal_sigma_s).collect();
@@ -266,7 +279,7 @@ fn calibrated_profile(
     Some(OffsetProfile {
         method: OffsetMethod::Pose,
         window_s,
-        step_s: window_s,
+        step_s,
         sigma_scale: f,
         windows: raw
             .iter()
