@@ -29,6 +29,8 @@ pub enum OffsetWay {
     SignedCurvature,
     /// eval's combination.
     Auto,
+    /// `auto`'s answer refined by the pose fit.
+    Pose,
 }
 
 impl OffsetWay {
@@ -41,6 +43,7 @@ impl OffsetWay {
             OffsetWay::Curvature => "curvature",
             OffsetWay::SignedCurvature => "signed-curvature",
             OffsetWay::Auto => "auto",
+            OffsetWay::Pose => "pose",
         }
     }
 }
@@ -58,6 +61,7 @@ impl From<OffsetMethod> for OffsetWay {
             OffsetMethod::Curvature => OffsetWay::Curvature,
             OffsetMethod::SignedCurvature => OffsetWay::SignedCurvature,
             OffsetMethod::Auto => OffsetWay::Auto,
+            OffsetMethod::Pose => OffsetWay::Pose,
         }
     }
 }

@@ -146,9 +146,7 @@ pub fn pose_clock_model(
         // No lever was ever fitted (neither the whole mission's constant nor the chosen model
         // converged): the windows held it at zero, and a forward lever then reads as Δt (0.2 m at a
         // walk is half a second) with a σ that cannot show it. The signal searches' answer stands.
-        if whole.is_none() {
-            return None;
-        }
+        whole.as_ref()?;
         if model.model == OffsetModel::Constant {
             let (mean, sigma) = weighted_mean(&profile);
             model.offset_s = mean;
