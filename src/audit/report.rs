@@ -269,6 +269,8 @@ pub enum ClockMethod {
     Speed,
     SignedCurvature,
     Curvature,
+    /// `auto` refined by the pose fit.
+    Pose,
 }
 
 impl From<OffsetSource> for ClockMethod {
@@ -279,6 +281,7 @@ impl From<OffsetSource> for ClockMethod {
             OffsetSource::Speed => ClockMethod::Speed,
             OffsetSource::SignedCurvature => ClockMethod::SignedCurvature,
             OffsetSource::Curvature => ClockMethod::Curvature,
+            OffsetSource::Pose => ClockMethod::Pose,
         }
     }
 }
