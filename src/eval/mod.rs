@@ -525,7 +525,7 @@ fn pose_over_time(
 ) -> Option<(TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport)> {
     use crate::align::pose_fit::{PoseData, PoseFitParams, PoseTrack};
     use crate::align::pose_model::pose_clock_model;
-    use crate::align::signals::SignalView;
+    use crate::align::time_offset::SignalView;
     let (ref_t, ref_p) = pair.reference;
     let (est_t, est_p) = pair.estimate;
     let data = PoseData {
