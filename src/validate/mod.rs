@@ -2,11 +2,11 @@
 //! known.
 //!
 //! Each mission of [`crate::simulate::scenario`] (every [`MissionKind`], fixed seeds) is evaluated
-//! in memory with all defaults — the same [`crate::eval::evaluate_loaded`] as `trajdrift eval` — and
+//! in memory with all defaults — the same `eval::evaluate_loaded` as `trajdrift eval` — and
 //! graded against its clock's truth: the headline Δt's error and whether its σ covers it, each profile
 //! window's, the clock model chosen (a drift or step warning on a constant clock is a false alarm),
-//! the drift and the steps recovered. [`table`] prints the calibration table; `--like` ([`like`])
-//! draws the missions from the user's own recording instead.
+//! the drift and the steps recovered. [`table`] prints the calibration table. (Missions shaped like
+//! the user's own recording, `--like`, are not built yet.)
 
 use rayon::prelude::*;
 
@@ -118,7 +118,7 @@ pub struct MissionGrade {
 }
 
 /// Evaluates `reference` and `estimate` (stamps in ns, the estimate on its own clock) with every
-/// default, as `trajdrift eval` would: the same [`crate::eval::evaluate_loaded`].
+/// default, as `trajdrift eval` would: the same `eval::evaluate_loaded`.
 pub fn evaluate_pair(reference: Trajectory, estimate: Trajectory) -> Result<Report> {
     let config = EvalConfig::new(
         None,
