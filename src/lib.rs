@@ -62,6 +62,11 @@ pub use trajdrift_core::report::json::{
     DriftErrorReport, EstimateReport, MethodStatus, OffsetSource, Report, TimeOffsetReport,
     TimeOffsetStatus,
 };
+/// Grading the default evaluation against simulated missions with a known truth (`trajdrift validate`).
+pub use validate::{
+    calibration, evaluate_pair, run as validate_missions, Calibration, MissionGrade,
+    ValidateOptions,
+};
 
 extern crate self as trajdrift;
 
@@ -79,4 +84,4 @@ mod job;
 mod plot;
 mod render;
 mod standard;
-pub mod validate;
+mod validate;

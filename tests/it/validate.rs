@@ -11,7 +11,7 @@ use std::process::Command;
 use trajdrift::align::clock_model::OffsetModel;
 use trajdrift::report::json::TimeOffsetStatus;
 use trajdrift::simulate::scenario::{MissionKind, Scenario, START_NS};
-use trajdrift::validate::{calibration, evaluate_pair, run, MissionGrade, ValidateOptions};
+use trajdrift::{calibration, evaluate_pair, validate_missions, MissionGrade, ValidateOptions};
 
 fn kind(g: &MissionGrade) -> MissionKind {
     g.kind.parse().expect("a known kind")
@@ -19,7 +19,7 @@ fn kind(g: &MissionGrade) -> MissionKind {
 
 #[test]
 fn reduced_validation_holds_the_calibration() {
-    let grades = run(
+    let grades = validate_missions(
         &ValidateOptions {
             per_kind: 3,
             ..ValidateOptions::default()

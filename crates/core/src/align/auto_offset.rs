@@ -13,7 +13,7 @@
 //! Δx = v·(Δt_curv − Δt_speed) (v: the reference's mean speed while moving) and reported as a
 //! `lever_arm_suspected` warning; a gap no plausible lever arm explains (|Δx| > [`MAX_LEVER_M`])
 //! makes the answer `weak`. Before a disagreement is judged, signed curvature is measured again with
-//! the reference's stands left out ([`crate::align::still`]): a turn in place seen by a sensor beside
+//! the reference's stands left out (`crate::align::still`): a turn in place seen by a sensor beside
 //! the reference point otherwise fakes a lead of several tenths of a second. Signed curvature alone
 //! is applied with a `lever_arm_unchecked` warning (speed cannot rule the lead out). Nothing
 //! confident: `weak`.

@@ -10,7 +10,7 @@
 //! [[`MIN_WINDOW_S`], [`MAX_WINDOW_S`]] (long enough to hold several starts, stops and turns; short
 //! enough that a 20-minute mission has ten), the step half of it; both can be given.
 //!
-//! **σ per window.** The residual σ of [`crate::align::offset_sigma`] sees the residual's size but
+//! **σ per window.** The residual σ of `crate::align::offset_sigma` sees the residual's size but
 //! not the noise that moved the peak, nor a shape difference between two sensors' signals: on real
 //! data it is ~100× too small. It is kept only as the windows' *relative* weight, and only upwards
 //! (a window's σ is at least the median window's: a small residual is no proof); its scale comes

@@ -11,9 +11,9 @@
 //! coarse grid with FFTs over blocks of the grid ([`crate::align::xcorr::masked_ncc_blocks`]; neither
 //! grid is held whole, see [`crate::align::grid::LazyGrid`]), then every fine step (1 ms) in a window
 //! of ±2 coarse steps around the coarse peak, with the sums of the fine grid formed from prefix sums
-//! over runs of the sparser signal ([`crate::align::fine_sums`]: no full-length signal on the fine
+//! over runs of the sparser signal (`crate::align::fine_sums`: no full-length signal on the fine
 //! grid), and finally a parabola through the best fine lag and its neighbours for a sub-step offset.
-//! The signals themselves come from [`crate::align::signals`], computed once per evaluation.
+//! The signals themselves come from `crate::align::signals`, computed once per evaluation.
 //!
 //! Confidence (all on the coarse curve, which covers the whole search range). Let ρ be the peak NCC,
 //! b the median NCC over the eligible lags (the level of an unrelated alignment) and P = ρ − b the
@@ -168,7 +168,7 @@ pub struct OffsetEstimate {
     /// Share of the two trajectories' time overlap (at the peak) where both signals are defined.
     pub defined_fraction: f64,
     /// Standard error of `offset_s`, seconds, from the residual of the aligned signals (see
-    /// [`crate::align::offset_sigma`]); `None` on an overlap too short to tell.
+    /// `crate::align::offset_sigma`); `None` on an overlap too short to tell.
     pub sigma_s: Option<f64>,
 }
 

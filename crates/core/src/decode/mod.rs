@@ -1,7 +1,7 @@
 //! Message decoding: bytes of one message → a pose or a position sample.
 //!
-//! [`cdr`] reads ROS 2 CDR, [`ros1`] ROS 1 serialization, [`tf`] turns TF messages into edges, [`ros2_msgs`] holds the message layouts, [`sample`] picks the layout by
-//! schema name and yields a [`Sample`], [`geodesy`] turns latitude/longitude into local ENU metres, and
+//! [`cdr`] reads ROS 2 CDR, [`ros1`] ROS 1 serialization, [`tf`] turns TF messages into edges, [`ros2_msgs`] holds the message layouts, `sample` picks the layout by
+//! schema name and yields a [`Sample`], `geodesy` turns latitude/longitude into local ENU metres, and
 //! [`ros2_schemas`] holds the schema texts needed to write MCAP files.
 
 pub mod cdr;

@@ -2,8 +2,8 @@
 //! reference's over windows of w metres of reference path.
 //!
 //! Per window, DE = |1 − α·Δs_est/Δs_ref|, with both path lengths measured on ε-decimated polylines
-//! ([`super::decimate`]) over the same time span, α the lever-arm correction ([`super::lever`]), and the
-//! paths inside rotations in place ([`super::rotation_in_place`]) left out of both. Path lengths and
+//! (`super::decimate`) over the same time span, α the lever-arm correction ([`super::lever`]), and the
+//! paths inside rotations in place (`super::rotation_in_place`) left out of both. Path lengths and
 //! angles do not depend on the frame, so the estimate needs no spatial alignment; it must be on the
 //! reference's clock (shift it by the time offset first).
 

@@ -10,7 +10,7 @@
 //! within Δt_max). Then r = 1/κ, and
 //!
 //! α_seg = r_ref/r_est when both radii are defined, neither is ~0 (below the lever arm a: a rotation
-//! about a point near a sensor, handled by [`super::rotation_in_place`]) and |r_est − r_ref| ≤ a; else 1.
+//! about a point near a sensor, handled by `super::rotation_in_place`) and |r_est − r_ref| ≤ a; else 1.
 //!
 //! The corrected estimate length of a window is Σ α_seg·Δs_est,seg and its reported α is
 //! corrected / raw estimate length.

@@ -18,7 +18,7 @@
 //! - A target that exists and is not a regular file — a device such as `/dev/null`, a FIFO, a
 //!   terminal, a symlink to one of them — is written through: opened and written, never replaced.
 //! - A regular file (or a new one) is written into a locked temporary file beside it and renamed onto it
-//!   when complete ([`atomic`]); a symlink to a regular file keeps pointing at it, and the file it
+//!   when complete (`atomic`); a symlink to a regular file keeps pointing at it, and the file it
 //!   points at is replaced. A failure at any step removes the temporary file and leaves the target as
 //!   it was; a run killed outright leaves one that the next writer of the folder removes, recognised
 //!   by the lock nobody holds.

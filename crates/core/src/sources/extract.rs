@@ -23,7 +23,7 @@ use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
 /// Every recording is a [`Source`]: its topics from its channel counts, its trajectories by
-/// [`extract`], its TF frames by [`crate::sources::tf_frames::frame_pairs`].
+/// `extract`, its TF frames by [`crate::sources::tf_frames::frame_pairs`].
 impl<R: Recording> Source for R {
     fn size_bytes(&self) -> u64 {
         self.recording_size()

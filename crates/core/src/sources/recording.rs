@@ -4,7 +4,7 @@
 //!
 //! MCAP files, ROS 1 bags, rosbag2 folders and multi-file missions all implement [`Recording`]; this
 //! module belongs to none of them, so no storage format is the others' lingua franca and the readers,
-//! extraction ([`crate::sources::extract`]) and TF ([`crate::sources::tf_chain`]) depend on it, not on
+//! extraction (`crate::sources::extract`) and TF ([`crate::sources::tf_chain`]) depend on it, not on
 //! each other.
 
 use std::collections::HashMap;

@@ -3,8 +3,8 @@
 //! A topic named `/tf:PARENT:CHILD` is not a channel: it is the pose of `CHILD` in `PARENT` composed
 //! from the `/tf` and `/tf_static` edges between them (e.g. map→odom→base_link). The edges are
 //! collected by [`TfCollector`] during the same single pass that reads the other requested topics
-//! ([`crate::sources::extract`]), so MCAP files, ROS 1 bags and rosbag2 folders all get chains; they are
-//! composed by [`crate::trajectory::tf_compose`].
+//! (`crate::sources::extract`), so MCAP files, ROS 1 bags and rosbag2 folders all get chains; they are
+//! composed by `crate::trajectory::tf_compose`.
 //!
 //! Choices (where nothing dictated one):
 //! - Channels: those named `/tf` or `/tf_static` (with or without the leading `/`, as ROS 1 bags

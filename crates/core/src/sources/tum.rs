@@ -39,7 +39,7 @@ const CHUNK: usize = 1 << 20;
 /// [`read_tum_rows`], reading the orientation columns only when `orientation` is true (a metric on
 /// positions alone then reads a million rows faster and keeps half the memory).
 ///
-/// The file is read in chunks of [`CHUNK`] bytes and every whole line is parsed straight from the
+/// The file is read in chunks of `CHUNK` bytes and every whole line is parsed straight from the
 /// chunk as bytes (no line copy, no UTF-8 pass: fields are ASCII numbers, anything else is reported
 /// as not a number); a partial last line moves to the front of the buffer for the next read.
 pub fn read_tum_rows_with(path: &Path, orientation: bool) -> Result<Trajectory> {

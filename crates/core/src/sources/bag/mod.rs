@@ -1,8 +1,8 @@
-//! ROS 1 bags (format 2.0; chunks uncompressed, bz2 or lz4) as a [`Source`].
+//! ROS 1 bags (format 2.0; chunks uncompressed, bz2 or lz4) as a `Source`.
 //!
-//! [`records`] reads the record layer; this file streams chunks in file order, turns connections
+//! `records` reads the record layer; this file streams chunks in file order, turns connections
 //! into channels (`ros1` messages, `ros1msg` schemas) and hands messages to the shared extraction
-//! ([`crate::sources::extract`]). [`writer`] writes small bags for tests and benchmarks.
+//! (`crate::sources::extract`). [`writer`] writes small bags for tests and benchmarks.
 
 pub(crate) mod records;
 pub mod writer;

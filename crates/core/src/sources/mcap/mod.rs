@@ -1,5 +1,5 @@
 //! MCAP recordings (ROS 2: `cdr` messages with `ros2msg` schemas; ROS 1: `ros1` messages with
-//! `ros1msg` schemas) as a [`Source`].
+//! `ros1msg` schemas) as a `Source`.
 //!
 //! [`stream`] is the single streaming pass everything is built on, [`summary`] the optional index at
 //! the end of the file; this file turns selected channels into trajectories.

@@ -241,7 +241,7 @@ fn record_length_limit(file_size: u64) -> usize {
     usize::try_from(limit).unwrap_or(usize::MAX)
 }
 
-/// Answers the reader's request for `need` more bytes with one read of at least [`MIN_READ`] bytes,
+/// Answers the reader's request for `need` more bytes with one read of at least `MIN_READ` bytes,
 /// but never more than the `left` bytes the file still holds (+1 to see its end): the reader's buffer
 /// is zero-filled to the requested size, so a damaged length must not size it. Returns the bytes read
 /// (0 at the end of the file).
