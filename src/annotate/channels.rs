@@ -232,20 +232,13 @@ impl Annotator {
 impl<W: Write + Seek> Annotations<W> for Annotator {
     fn start(&mut self, w: &mut Writer<W>) -> Result<()> {
         let [de_schema, curv_schema, pose_schema] = self.schema_ids;
-        w.add_schema_with_id(
-            de_schema,
-            "trajdrift.DriftErrorWindow",
-            "jsonschema",
-            DRIFT_ERROR_SCHEMA.as_bytes(),
-        )
-        .map_err(|e| self.err(e))?;
-        w.add_schema_with_id(
-            curv_schema,
-            "trajdrift.CurvatureSample",
-            "jsonschema",
-            CURVATURE_SCHEMA.as_bytes(),
-        )
-        .map_err(|e| self.err(e))?;
+        for (id, name, text) in [
+            (de_schema, "trajdrift.DriftErrorWindow", DRIFT_ERROR_SCHEMA),
+            (curv_schema, "trajdrift.CurvatureSample", CURVATURE_SCHEMA),
+        ] {
+            w.add_schema_with_id(id, name, "jsonschema", text.as_bytes())
+                .map_err(|e| self.err(e))?;
+        }
         let no_meta = BTreeMap::new();
         let json_channel = |w: &mut Writer<W>, id: u16, schema: u16, t: String| {
             w.add_channel_with_id(id, schema, &t, "json", &no_meta)
@@ -296,42 +289,7 @@ impl<W: Write + Seek> Annotations<W> for Annotator {
                 )
                 .map_err(|e| self.err(e))?;
                 self.aligned_added[i] = true;
-                for (k, &stamp) in traj.stamps_ns.iter().enumerate() {
-                    let Ok(log_time) = u64::try_from(stamp) else {
-                        continue;
-                    };
-                    let p = traj.positions[k];
-                    let q = traj
-                        .orientations
-                        .as_ref()
-                        .and_then(|o| o.get(k))
-                        .map(|q| Quaternion {
-                            x: q.i,
-                            y: q.j,
-                            z: q.k,
-                            w: q.w,
-                        })
-                        .unwrap_or_default();
-                    let msg = PoseStamped {
-                        header: Header {
-                            stamp: Time::from_ns(stamp),
-                            frame_id: String::new(),
-                        },
-                        pose: Pose {
-                            position: Point {
-                                x: p.x,
-                                y: p.y,
-                                z: p.z,
-                            },
-                            orientation: q,
-                        },
-                    };
-                    pending.push(Pending {
-                        log_time,
-                        channel: aligned,
-                        data: encode_le(&msg),
-                    });
-                }
+                pending.extend(aligned_messages(traj, aligned));
             }
         }
         for (t, m) in &self.plan.reference_curvature {
@@ -515,6 +473,49 @@ pub fn shift_stamp(
 ) -> std::result::Result<Vec<u8>, String> {
     let layout = StampLayout::of(encoding, data)?;
     layout.write(data, layout.read(data) + dt_ns)
+}
+
+/// The aligned estimate as `PoseStamped` messages on `channel`, one per pose (log time = its
+/// stamp; poses before 1970 have no log time and are left out).
+fn aligned_messages(traj: &Trajectory, channel: u16) -> Vec<Pending> {
+    let mut out = Vec::with_capacity(traj.stamps_ns.len());
+    for (k, &stamp) in traj.stamps_ns.iter().enumerate() {
+        let Ok(log_time) = u64::try_from(stamp) else {
+            continue;
+        };
+        let p = traj.positions[k];
+        let q = traj
+            .orientations
+            .as_ref()
+            .and_then(|o| o.get(k))
+            .map(|q| Quaternion {
+                x: q.i,
+                y: q.j,
+                z: q.k,
+                w: q.w,
+            })
+            .unwrap_or_default();
+        let msg = PoseStamped {
+            header: Header {
+                stamp: Time::from_ns(stamp),
+                frame_id: String::new(),
+            },
+            pose: Pose {
+                position: Point {
+                    x: p.x,
+                    y: p.y,
+                    z: p.z,
+                },
+                orientation: q,
+            },
+        };
+        out.push(Pending {
+            log_time,
+            channel,
+            data: encode_le(&msg),
+        });
+    }
+    out
 }
 
 #[cfg(test)]

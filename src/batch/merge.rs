@@ -12,7 +12,7 @@
 //! Any of these is a problem: `merge` names each and exits 1 without writing a summary, or, with
 //! `--allow-partial`, writes the summary marked partial with the problems listed.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
 use serde::Deserialize;
@@ -191,12 +191,20 @@ fn check_runs(
         .iter()
         .filter(|(_, r)| r.parameters == first.parameters)
         .collect();
-    let covered: std::collections::BTreeSet<&String> = same
+    unfinished_runs(set, &same);
+    let asked: BTreeSet<&String> = same.iter().flat_map(|(_, r)| &r.selected).collect();
+    missing_shards(set, first, &same, &asked);
+    check_results(set, first, &asked, found);
+}
+
+/// A record still `running` whose missions no complete record covers: killed or still running.
+fn unfinished_runs(set: &mut MergeSet, same: &[&(PathBuf, RunRecord)]) {
+    let covered: BTreeSet<&String> = same
         .iter()
         .filter(|(_, r)| r.status == RunStatus::Complete)
         .flat_map(|(_, r)| &r.selected)
         .collect();
-    for (p, r) in &same {
+    for (p, r) in same {
         if r.status == RunStatus::Running && r.selected.iter().any(|m| !covered.contains(m)) {
             set.problems.push(format!(
                 "{}: its run did not finish (killed, or still running): re-run it{}",
@@ -208,29 +216,46 @@ fn check_runs(
             ));
         }
     }
-    // Missions of the batch no record asked for: the shards that would have are missing.
-    let asked: std::collections::BTreeSet<&String> =
-        same.iter().flat_map(|(_, r)| &r.selected).collect();
-    if first.missions.keys().any(|m| !asked.contains(m)) {
-        let mut counts: Vec<usize> = same
-            .iter()
-            .filter_map(|(_, r)| r.shard.map(|s| s.count))
-            .collect();
-        counts.sort_unstable();
-        counts.dedup();
-        for count in counts {
-            for i in 1..=count {
-                if !same
-                    .iter()
-                    .any(|(_, r)| r.shard.is_some_and(|s| s.index == i && s.count == count))
-                {
-                    set.problems.push(format!(
-                        "missing shard {i} of {count} (no trajdrift-run-shard-{i}-of-{count}.json): run it with --shard {i}/{count}"
-                    ));
-                }
+}
+
+/// Missions of the batch no record asked for: the shards that would have are missing.
+fn missing_shards(
+    set: &mut MergeSet,
+    first: &RunRecord,
+    same: &[&(PathBuf, RunRecord)],
+    asked: &BTreeSet<&String>,
+) {
+    if first.missions.keys().all(|m| asked.contains(m)) {
+        return;
+    }
+    let mut counts: Vec<usize> = same
+        .iter()
+        .filter_map(|(_, r)| r.shard.map(|s| s.count))
+        .collect();
+    counts.sort_unstable();
+    counts.dedup();
+    for count in counts {
+        for i in 1..=count {
+            if !same
+                .iter()
+                .any(|(_, r)| r.shard.is_some_and(|s| s.index == i && s.count == count))
+            {
+                set.problems.push(format!(
+                    "missing shard {i} of {count} (no trajdrift-run-shard-{i}-of-{count}.json): run it with --shard {i}/{count}"
+                ));
             }
         }
     }
+}
+
+/// Each asked mission has a result computed with the run's parameters; results of missions the
+/// run does not hold are leftovers, named and dropped.
+fn check_results(
+    set: &mut MergeSet,
+    first: &RunRecord,
+    asked: &BTreeSet<&String>,
+    found: &mut BTreeMap<String, (PathBuf, MissionResult)>,
+) {
     for m in first.missions.keys() {
         if asked.contains(m) && !found.contains_key(m) {
             set.problems.push(format!(

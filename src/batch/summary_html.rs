@@ -29,6 +29,35 @@ pub fn render(summary: &Summary, dir: &Path) -> String {
         summary.warned.len(),
         summary.weak.len()
     );
+    distribution_figure(&mut b, summary);
+    missions_table(&mut b, summary, dir);
+    if !summary.warned.is_empty() {
+        b.push_str("<h2>Missions with a warning</h2>\n");
+        for w in &summary.warned {
+            let _ = writeln!(
+                b,
+                "<p class=\"warn\">{}: {}</p>",
+                escape(&w.mission),
+                escape(&w.warnings.join(", "))
+            );
+        }
+    }
+    if !summary.failed.is_empty() {
+        b.push_str("<h2>Failed missions</h2>\n");
+        for f in &summary.failed {
+            let _ = writeln!(
+                b,
+                "<p class=\"warn\">{}: {}</p>",
+                escape(&f.mission),
+                escape(&f.error)
+            );
+        }
+    }
+    page("trajdrift batch summary", &b)
+}
+
+/// The box plot of each estimate's DE RMSE across missions (left out when it cannot be drawn).
+fn distribution_figure(b: &mut String, summary: &Summary) {
     let figure = DeDistribution {
         title: "Drift Error across missions".into(),
         groups: summary
@@ -45,6 +74,10 @@ pub fn render(summary: &Summary, dir: &Path) -> String {
     if let Ok(svg) = render_svg(&figure) {
         let _ = writeln!(b, "<figure>{svg}<figcaption>DE RMSE of each mission; box: interquartile range, bar: median.</figcaption></figure>");
     }
+}
+
+/// One row per mission and estimate, linked to the mission's own report.
+fn missions_table(b: &mut String, summary: &Summary, dir: &Path) {
     b.push_str("<h2>Missions</h2>\n<table><tr><th>mission</th><th>estimate</th><th>w (m)</th><th>Δt (s)</th><th>offset</th><th>confidence</th><th>DE RMSE</th><th>report</th></tr>\n");
     let link = |mission: &str| {
         // A name that is not a safe file name (it came from a JSON file) gets no link.
@@ -77,27 +110,4 @@ pub fn render(summary: &Summary, dir: &Path) -> String {
         }
     }
     b.push_str("</table>\n");
-    if !summary.warned.is_empty() {
-        b.push_str("<h2>Missions with a warning</h2>\n");
-        for w in &summary.warned {
-            let _ = writeln!(
-                b,
-                "<p class=\"warn\">{}: {}</p>",
-                escape(&w.mission),
-                escape(&w.warnings.join(", "))
-            );
-        }
-    }
-    if !summary.failed.is_empty() {
-        b.push_str("<h2>Failed missions</h2>\n");
-        for f in &summary.failed {
-            let _ = writeln!(
-                b,
-                "<p class=\"warn\">{}: {}</p>",
-                escape(&f.mission),
-                escape(&f.error)
-            );
-        }
-    }
-    page("trajdrift batch summary", &b)
 }

@@ -223,22 +223,7 @@ pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
     let guard = claim_outputs(a, evo)?;
     let resolved = time_offset(a, &inputs)?;
     let pipeline = pipeline(a, resolved.constant_s);
-    let orientation =
-        trajdrift::metrics::standard::needs_orientation(metric, relation, pipeline.alignment)
-            || evo.motion_filter.is_some();
-    let mut pair = inputs.load_with(&|_| {}, orientation)?;
-    if let Some(model) = &resolved.model {
-        pair.estimate = model.apply_to_poses(pair.estimate);
-    }
-    refuse_single_poses(&pair)?;
-    log.detail(&format!(
-        "reference {}: {} poses; estimate {}: {} poses",
-        pair.reference_label,
-        pair.reference.len(),
-        pair.estimate_label,
-        pair.estimate.len()
-    ));
-    filter_poses(&mut pair, evo, &log)?;
+    let pair = load_pair(evo, &inputs, &resolved, (metric, relation, &pipeline), &log)?;
     let LoadedPair {
         reference,
         estimate,
@@ -302,6 +287,35 @@ pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
     }
     log.finish(&guard)?;
     Ok(code)
+}
+
+/// Loads both trajectories (orientations only where the metric, the alignment or evo's motion
+/// filter needs them), moves the estimate by a non-constant clock model, refuses single poses and
+/// applies evo's pose filters.
+fn load_pair(
+    evo: &EvoMetricArgs,
+    inputs: &MetricInputs,
+    resolved: &ResolvedOffset,
+    (metric, relation, pipeline): (Metric, PoseRelation, &Pipeline),
+    log: &EvoLog,
+) -> Result<LoadedPair> {
+    let orientation =
+        trajdrift::metrics::standard::needs_orientation(metric, relation, pipeline.alignment)
+            || evo.motion_filter.is_some();
+    let mut pair = inputs.load_with(&|_| {}, orientation)?;
+    if let Some(model) = &resolved.model {
+        pair.estimate = model.apply_to_poses(pair.estimate);
+    }
+    refuse_single_poses(&pair)?;
+    log.detail(&format!(
+        "reference {}: {} poses; estimate {}: {} poses",
+        pair.reference_label,
+        pair.reference.len(),
+        pair.estimate_label,
+        pair.estimate.len()
+    ));
+    filter_poses(&mut pair, evo, log)?;
+    Ok(pair)
 }
 
 /// Names once on stderr the evo flags that have no meaning here (accepted, never a usage error).

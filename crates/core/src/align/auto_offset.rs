@@ -196,33 +196,17 @@ pub fn auto_time_offset_of(pair: &Pair<'_>, params: &OffsetParams) -> Result<Aut
     );
     // Before a disagreement is read as a lever arm: the reference's stands (turns in place) left out
     // of the signed curvature, the estimate's at the speed answer (see `crate::align::still`).
-    let mut stands_left_out = None;
-    if let (Some(s), Some(c), Some(v)) = (speed, signed, mean_speed_mps) {
-        if (c.offset_s - s.offset_s).abs() > AGREE_S {
-            let margin = params.curvature.eps_m / v;
-            let on_ref = still_intervals(ref_t, ref_p, gap, margin);
-            if !on_ref.is_empty() {
-                let on_est: Vec<(f64, f64)> = on_ref
-                    .iter()
-                    .map(|&(a, b)| (a - s.offset_s, b - s.offset_s))
-                    .collect();
-                if let Ok(m) = estimate_time_offset_cached(
-                    OffsetMethod::SignedCurvature,
-                    pair,
-                    params,
-                    (&on_ref, &on_est),
-                ) {
-                    stands_left_out = Some((on_ref.len(), c.offset_s, m.offset_s));
-                    signed = (m.status == OffsetStatus::Ok).then_some(m);
-                }
-            }
-        }
+    let stands_left_out = without_stands(pair, params, (speed, signed), mean_speed_mps, gap);
+    if let Some((_, masked)) = &stands_left_out {
+        signed = (masked.status == OffsetStatus::Ok).then_some(*masked);
     }
     let mut decision = decide(speed.as_ref(), signed.as_ref(), mean_speed_mps);
-    if let Some((n, plain, masked)) = stands_left_out {
+    if let (Some((n, masked)), Some(plain)) =
+        (stands_left_out, ok(get(OffsetMethod::SignedCurvature)))
+    {
         decision.reason = format!(
-            "{} (signed-curvature {plain:+.3} s over the whole mission, {masked:+.3} s without the reference's {n} stand(s))",
-            decision.reason
+            "{} (signed-curvature {:+.3} s over the whole mission, {:+.3} s without the reference's {n} stand(s))",
+            decision.reason, plain.offset_s, masked.offset_s
         );
     }
     let estimate = match decision.applied.and_then(get) {
@@ -251,6 +235,51 @@ pub fn auto_time_offset_of(pair: &Pair<'_>, params: &OffsetParams) -> Result<Aut
             }
         }
     };
+    let warnings = verdict_warnings(&decision);
+    Ok(AutoOffset {
+        estimate,
+        runs,
+        decision,
+        mean_speed_mps,
+        warnings,
+    })
+}
+
+/// The signed-curvature estimate with the reference's stands (turns in place) left out, when it
+/// disagrees with the speed estimate: `(number of stands, the masked estimate)`; `None` when
+/// they agree, a signal is missing or the reference has no stand.
+fn without_stands(
+    pair: &Pair<'_>,
+    params: &OffsetParams,
+    (speed, signed): (Option<OffsetEstimate>, Option<OffsetEstimate>),
+    mean_speed_mps: Option<f64>,
+    gap: f64,
+) -> Option<(usize, OffsetEstimate)> {
+    let (s, c, v) = (speed?, signed?, mean_speed_mps?);
+    if (c.offset_s - s.offset_s).abs() <= AGREE_S {
+        return None;
+    }
+    let (ref_t, ref_p) = pair.reference;
+    let on_ref = still_intervals(ref_t, ref_p, gap, params.curvature.eps_m / v);
+    if on_ref.is_empty() {
+        return None;
+    }
+    let on_est: Vec<(f64, f64)> = on_ref
+        .iter()
+        .map(|&(a, b)| (a - s.offset_s, b - s.offset_s))
+        .collect();
+    let masked = estimate_time_offset_cached(
+        OffsetMethod::SignedCurvature,
+        pair,
+        params,
+        (&on_ref, &on_est),
+    )
+    .ok()?;
+    Some((on_ref.len(), masked))
+}
+
+/// The warnings a verdict carries: a suspected lever arm, or a lever arm curvature alone cannot check.
+fn verdict_warnings(decision: &Decision) -> Vec<Warning> {
     let mut warnings = Vec::new();
     match decision.verdict {
         Verdict::LeverArm => warnings.push(Warning {
@@ -269,13 +298,7 @@ pub fn auto_time_offset_of(pair: &Pair<'_>, params: &OffsetParams) -> Result<Aut
         }),
         _ => {}
     }
-    Ok(AutoOffset {
-        estimate,
-        runs,
-        decision,
-        mean_speed_mps,
-        warnings,
-    })
+    warnings
 }
 
 #[cfg(test)]

@@ -362,35 +362,14 @@ fn read_pass(
             else {
                 return Ok(());
             };
-            let index = acc.messages;
-            acc.messages += 1;
-            let sample = decode::decode_message(acc.kind, encoding, m.data).map_err(|detail| {
-                Error::Decode {
-                    path: path.to_path_buf(),
-                    topic: c.topic.clone(),
-                    index,
-                    detail,
-                }
-            })?;
-            if !sample.is_valid() {
-                acc.invalid_dropped += 1;
-                return Ok(());
-            }
-            let stamp_ns = match options.stamp {
-                StampSource::Header => sample.stamp_ns,
-                StampSource::Log => log_stamp(m.log_time),
-            };
-            let position = match sample.position {
-                SamplePosition::Local(p) => p,
-                SamplePosition::Geodetic {
-                    lat_deg,
-                    lon_deg,
-                    alt_m,
-                    ..
-                } => Vector3::new(lat_deg, lon_deg, alt_m),
-            };
-            acc.trajectory.push(stamp_ns, position, sample.orientation);
-            Ok(())
+            acc.take(
+                path,
+                &c.topic,
+                encoding,
+                m.data,
+                options.stamp,
+                log_stamp(m.log_time),
+            )
         },
     )?;
     Ok(Pass {
@@ -398,6 +377,51 @@ fn read_pass(
         tf,
         outcome,
     })
+}
+
+impl Accumulator {
+    /// Decodes one message of the topic and keeps its sample (stamped by the header or by the
+    /// log time `log_ns`); a sample the decoder marks invalid is counted and dropped. Geodetic
+    /// fixes are kept as (lat, lon, alt) and projected after the pass.
+    #[inline]
+    fn take(
+        &mut self,
+        path: &Path,
+        topic: &str,
+        encoding: Encoding,
+        data: &[u8],
+        stamp: StampSource,
+        log_ns: i64,
+    ) -> Result<()> {
+        let index = self.messages;
+        self.messages += 1;
+        let sample =
+            decode::decode_message(self.kind, encoding, data).map_err(|detail| Error::Decode {
+                path: path.to_path_buf(),
+                topic: topic.to_string(),
+                index,
+                detail,
+            })?;
+        if !sample.is_valid() {
+            self.invalid_dropped += 1;
+            return Ok(());
+        }
+        let stamp_ns = match stamp {
+            StampSource::Header => sample.stamp_ns,
+            StampSource::Log => log_ns,
+        };
+        let position = match sample.position {
+            SamplePosition::Local(p) => p,
+            SamplePosition::Geodetic {
+                lat_deg,
+                lon_deg,
+                alt_m,
+                ..
+            } => Vector3::new(lat_deg, lon_deg, alt_m),
+        };
+        self.trajectory.push(stamp_ns, position, sample.orientation);
+        Ok(())
+    }
 }
 
 /// The trajectory of the TF chain `r`, composed from the collected edges.
