@@ -216,198 +216,45 @@ fn evaluate_estimate(
     n_estimates: usize,
 ) -> Result<(EstimateReport, Vec<Warning>)> {
     let ref_t = reference.trajectory.times_s(t0_ns);
-    let ref_p = &reference.trajectory.positions;
     let est_t = est.trajectory.times_s(t0_ns);
-    let est_p = &est.trajectory.positions;
-    let mut warnings = Vec::new();
-
-    let time_offset = match config.params.time_offset {
-        Some(dt) => TimeOffsetReport {
-            method: OffsetSource::Given,
-            offset_s: dt,
-            applied_s: dt,
-            status: TimeOffsetStatus::Given,
-            reason: Some("given with --time-offset".into()),
-            model: Some(OffsetModel::Constant),
-            ..Default::default()
-        },
-        None => {
-            // The methods' signals, computed once for the search, the `auto` re-run and the
-            // profile, and dropped with this arm (before the metrics copy the trajectories).
-            let cache = SignalCache::default();
-            let pair = Pair::new((&ref_t, ref_p), (&est_t, est_p), &cache);
-            let params = config.offset_params();
-            // `auto` runs every method; a named method runs alone (only what it needs is computed).
-            let auto = if config.params.offset_method() == OffsetMethod::Auto {
-                Some(match auto_time_offset_of(&pair, &params) {
-                    Ok(a) => a,
-                    Err(e @ Error::NoOverlap { .. }) => {
-                        return Err(clone_no_overlap(&e, &est.label))
-                    }
-                    Err(e) => return Err(relabel(e, &est.label)),
-                })
-            } else {
-                None
-            };
-            let single: Vec<(OffsetMethod, Result<OffsetEstimate>)> = match auto {
-                Some(_) => Vec::new(),
-                None => vec![(
-                    config.params.offset_method(),
-                    estimate_time_offset_cached(
-                        config.params.offset_method(),
-                        &pair,
-                        &params,
-                        (&[], &[]),
-                    ),
-                )],
-            };
-            let runs = auto.as_ref().map_or(&single, |a| &a.runs);
-            let methods: Vec<OffsetMethodReport> =
-                runs.iter().map(|(m, r)| method_report(*m, r)).collect();
-            // The answer of the requested method (`auto`: the combined one) and why.
-            let (chosen, reason, implied_lever) = match &auto {
-                Some(auto) => {
-                    warnings.extend(auto.warnings.iter().map(|w| Warning {
-                        code: w.code,
-                        message: format!("{}: {}", est.name, w.message),
-                    }));
-                    (
-                        Some(Ok(auto.estimate)),
-                        auto.decision.reason.clone(),
-                        auto.decision.implied_lever_arm_m,
-                    )
-                }
-                None => (
-                    single.first().map(|(_, r)| r.as_ref().map(|o| *o)),
-                    format!("--offset-method {}", config.params.offset_method().as_str()),
-                    None,
-                ),
-            };
-            match chosen {
-                Some(Ok(o)) if o.status == OffsetStatus::Ok => {
-                    // `auto` refines its answer by the pose fit when the estimate has orientations.
-                    let orientations = est.trajectory.orientations.as_deref();
-                    let posed = match orientations {
-                        Some(q) if config.params.offset_method() == OffsetMethod::Auto => {
-                            pose_over_time(config, &params, &pair, q, &o, &est.name, t0_ns)
-                        }
-                        _ => None,
-                    };
-                    let (report, w, method, methods, reason) = match posed {
-                        Some((report, w, note, entry)) => {
-                            let mut methods = methods;
-                            methods.push(entry);
-                            (
-                                report,
-                                w,
-                                OffsetMethod::Pose,
-                                methods,
-                                format!("{reason}; {note}"),
-                            )
-                        }
-                        None => {
-                            let (report, w) =
-                                over_time(config, &params, &pair, &o, &est.name, t0_ns);
-                            (report, w, o.method, methods, reason)
-                        }
-                    };
-                    warnings.extend(w);
-                    TimeOffsetReport {
-                        method: method.into(),
-                        offset_s: report.offset_s,
-                        applied_s: report.offset_s,
-                        correlation: Some(o.correlation),
-                        confidence: Some(o.confidence),
-                        status: TimeOffsetStatus::Ok,
-                        methods,
-                        reason: Some(reason),
-                        implied_lever_arm_m: implied_lever,
-                        ..report
-                    }
-                }
-                Some(Err(e @ Error::NoOverlap { .. })) => {
-                    return Err(clone_no_overlap(e, &est.label))
-                }
-                other => {
-                    let (method, offset_s, correlation, confidence) = match other {
-                        Some(Ok(o)) => (
-                            o.method,
-                            o.offset_s,
-                            Some(o.correlation),
-                            Some(o.confidence),
-                        ),
-                        _ => (config.params.offset_method(), 0.0, None, None),
-                    };
-                    let hint = if config.params.offset_method() == OffsetMethod::Auto {
-                        format!("{}. Check the overlap or give --time-offset", reason)
-                    } else {
-                        "Check the overlap, try --offset-method auto or give --time-offset".into()
-                    };
-                    warnings.push(Warning {
-                        code: WarningCode::WeakTimeOffset,
-                        message: format!(
-                            "{}: the {} time-offset peak is weak (best {:+.3} s); Drift Error computed at 0 s. {}",
-                            est.name,
-                            method.as_str(),
-                            offset_s,
-                            hint
-                        ),
-                    });
-                    TimeOffsetReport {
-                        method: method.into(),
-                        offset_s,
-                        applied_s: 0.0,
-                        correlation,
-                        confidence,
-                        status: TimeOffsetStatus::Weak,
-                        methods,
-                        reason: Some(reason),
-                        implied_lever_arm_m: implied_lever,
-                        ..Default::default()
-                    }
-                }
-            }
-        }
+    let (time_offset, warnings) = match config.params.time_offset {
+        Some(dt) => (given_offset(dt), Vec::new()),
+        None => searched_offset(
+            config,
+            (&ref_t, &reference.trajectory.positions),
+            &est_t,
+            est,
+            t0_ns,
+        )?,
     };
-
     // Shift onto the reference clock and crop like the reference.
     // The report's own clock model, to the nanosecond (see `clock`).
     let mut aligned = ClockCorrection::from_report(&time_offset).apply(&est.trajectory);
     aligned.crop(crop.0, crop.1);
-    let aligned_t = aligned.times_s(t0_ns);
     if aligned.len() < 3 {
-        let (r0, r1) = (
-            ref_t.first().copied().unwrap_or(0.0),
-            ref_t.last().copied().unwrap_or(0.0),
-        );
+        let first_last = |t: &[f64]| {
+            (
+                t.first().copied().unwrap_or(0.0),
+                t.last().copied().unwrap_or(0.0),
+            )
+        };
+        let ((est_start, est_end), (ref_start, ref_end)) = (first_last(&est_t), first_last(&ref_t));
         return Err(Error::NoOverlap {
             estimate: est.label.clone(),
-            est_start: est_t.first().copied().unwrap_or(0.0),
-            est_end: est_t.last().copied().unwrap_or(0.0),
-            ref_start: r0,
-            ref_end: r1,
+            est_start,
+            est_end,
+            ref_start,
+            ref_end,
             offset: time_offset.applied_s,
         });
     }
-    let t0_s = t0_ns as f64 * 1e-9;
-    let params = config.drift_params(config.params.windows_m()[0]);
-    let drift = if config.params.metric_set().de {
-        drift_error_windows(
-            &ref_t,
-            ref_p,
-            &aligned_t,
-            &aligned.positions,
-            &params,
-            &config.params.windows_m(),
-        )
-        .map_err(|e| relabel(e, &est.label))?
-        .iter()
-        .map(|r| drift_report(r, t0_s))
-        .collect()
-    } else {
-        Vec::new()
-    };
-    drop(aligned_t);
+    let drift = drift_of(
+        config,
+        (&ref_t, &reference.trajectory.positions),
+        &aligned,
+        est,
+        t0_ns,
+    )?;
     if let Some(file) = &config.export_aligned {
         export::write_aligned(
             &export::aligned_path(file, &est.name, n_estimates),
@@ -437,6 +284,224 @@ fn evaluate_estimate(
         },
         warnings,
     ))
+}
+
+/// `--time-offset S`: applied as given, no search.
+fn given_offset(dt: f64) -> TimeOffsetReport {
+    TimeOffsetReport {
+        method: OffsetSource::Given,
+        offset_s: dt,
+        applied_s: dt,
+        status: TimeOffsetStatus::Given,
+        reason: Some("given with --time-offset".into()),
+        model: Some(OffsetModel::Constant),
+        ..Default::default()
+    }
+}
+
+/// What the searches said, whatever their answer: each method's row, why the answer is the one
+/// chosen, and the lever arm a disagreement implies.
+struct Searched {
+    methods: Vec<OffsetMethodReport>,
+    reason: String,
+    implied_lever: Option<f64>,
+}
+
+/// The searched time offset: `auto` runs every method (and refines the answer by the pose fit
+/// when the estimate has orientations), a named method runs alone; over time, its clock model.
+fn searched_offset(
+    config: &EvalConfig,
+    (ref_t, ref_p): (&[f64], &[nalgebra::Vector3<f64>]),
+    est_t: &[f64],
+    est: &Loaded,
+    t0_ns: i64,
+) -> Result<(TimeOffsetReport, Vec<Warning>)> {
+    // The methods' signals, computed once for the search, the `auto` re-run and the profile, and
+    // dropped on return (before the metrics copy the trajectories).
+    let cache = SignalCache::default();
+    let pair = Pair::new((ref_t, ref_p), (est_t, &est.trajectory.positions), &cache);
+    let params = config.offset_params();
+    let method = config.params.offset_method();
+    let mut warnings = Vec::new();
+    // `auto` runs every method; a named method runs alone (only what it needs is computed).
+    let auto = if method == OffsetMethod::Auto {
+        Some(match auto_time_offset_of(&pair, &params) {
+            Ok(a) => a,
+            Err(e @ Error::NoOverlap { .. }) => return Err(clone_no_overlap(&e, &est.label)),
+            Err(e) => return Err(relabel(e, &est.label)),
+        })
+    } else {
+        None
+    };
+    let single: Vec<(OffsetMethod, Result<OffsetEstimate>)> = match auto {
+        Some(_) => Vec::new(),
+        None => vec![(
+            method,
+            estimate_time_offset_cached(method, &pair, &params, (&[], &[])),
+        )],
+    };
+    let runs = auto.as_ref().map_or(&single, |a| &a.runs);
+    let methods: Vec<OffsetMethodReport> = runs.iter().map(|(m, r)| method_report(*m, r)).collect();
+    // The answer of the requested method (`auto`: the combined one) and why.
+    let (chosen, searched) = match &auto {
+        Some(auto) => {
+            warnings.extend(auto.warnings.iter().map(|w| Warning {
+                code: w.code,
+                message: format!("{}: {}", est.name, w.message),
+            }));
+            let searched = Searched {
+                methods,
+                reason: auto.decision.reason.clone(),
+                implied_lever: auto.decision.implied_lever_arm_m,
+            };
+            (Some(Ok(auto.estimate)), searched)
+        }
+        None => {
+            let searched = Searched {
+                methods,
+                reason: format!("--offset-method {}", method.as_str()),
+                implied_lever: None,
+            };
+            (
+                single.first().map(|(_, r)| r.as_ref().map(|o| *o)),
+                searched,
+            )
+        }
+    };
+    let (report, w) = match chosen {
+        Some(Ok(o)) if o.status == OffsetStatus::Ok => {
+            accepted_offset(config, &params, &pair, est, t0_ns, &o, searched)
+        }
+        Some(Err(e @ Error::NoOverlap { .. })) => return Err(clone_no_overlap(e, &est.label)),
+        Some(Ok(o)) => weak_offset(config, est, Some(&o), searched),
+        _ => weak_offset(config, est, None, searched),
+    };
+    warnings.extend(w);
+    Ok((report, warnings))
+}
+
+/// A confident answer: its clock model over time (refined by the pose fit under `auto` when the
+/// estimate has orientations), applied.
+fn accepted_offset(
+    config: &EvalConfig,
+    params: &crate::align::time_offset::OffsetParams,
+    pair: &Pair<'_>,
+    est: &Loaded,
+    t0_ns: i64,
+    o: &OffsetEstimate,
+    searched: Searched,
+) -> (TimeOffsetReport, Vec<Warning>) {
+    let Searched {
+        mut methods,
+        reason,
+        implied_lever,
+    } = searched;
+    let posed = match est.trajectory.orientations.as_deref() {
+        Some(q) if config.params.offset_method() == OffsetMethod::Auto => {
+            pose_over_time(config, params, pair, q, o, &est.name, t0_ns)
+        }
+        _ => None,
+    };
+    let (report, w, method, reason) = match posed {
+        Some((report, w, note, entry)) => {
+            methods.push(entry);
+            (report, w, OffsetMethod::Pose, format!("{reason}; {note}"))
+        }
+        None => {
+            let (report, w) = over_time(config, params, pair, o, &est.name, t0_ns);
+            (report, w, o.method, reason)
+        }
+    };
+    let report = TimeOffsetReport {
+        method: method.into(),
+        offset_s: report.offset_s,
+        applied_s: report.offset_s,
+        correlation: Some(o.correlation),
+        confidence: Some(o.confidence),
+        status: TimeOffsetStatus::Ok,
+        methods,
+        reason: Some(reason),
+        implied_lever_arm_m: implied_lever,
+        ..report
+    };
+    (report, w)
+}
+
+/// No confident peak: nothing applied (0 s), the best answer reported, a warning saying what to do.
+fn weak_offset(
+    config: &EvalConfig,
+    est: &Loaded,
+    best: Option<&OffsetEstimate>,
+    searched: Searched,
+) -> (TimeOffsetReport, Vec<Warning>) {
+    let (method, offset_s, correlation, confidence) = match best {
+        Some(o) => (
+            o.method,
+            o.offset_s,
+            Some(o.correlation),
+            Some(o.confidence),
+        ),
+        None => (config.params.offset_method(), 0.0, None, None),
+    };
+    let hint = if config.params.offset_method() == OffsetMethod::Auto {
+        format!(
+            "{}. Check the overlap or give --time-offset",
+            searched.reason
+        )
+    } else {
+        "Check the overlap, try --offset-method auto or give --time-offset".into()
+    };
+    let warning = Warning {
+        code: WarningCode::WeakTimeOffset,
+        message: format!(
+            "{}: the {} time-offset peak is weak (best {:+.3} s); Drift Error computed at 0 s. {}",
+            est.name,
+            method.as_str(),
+            offset_s,
+            hint
+        ),
+    };
+    let report = TimeOffsetReport {
+        method: method.into(),
+        offset_s,
+        applied_s: 0.0,
+        correlation,
+        confidence,
+        status: TimeOffsetStatus::Weak,
+        methods: searched.methods,
+        reason: Some(searched.reason),
+        implied_lever_arm_m: searched.implied_lever,
+        ..Default::default()
+    };
+    (report, vec![warning])
+}
+
+/// The Drift Error of the aligned estimate at every window size (none unless `de` is asked for).
+fn drift_of(
+    config: &EvalConfig,
+    (ref_t, ref_p): (&[f64], &[nalgebra::Vector3<f64>]),
+    aligned: &crate::trajectory::Trajectory,
+    est: &Loaded,
+    t0_ns: i64,
+) -> Result<Vec<DriftErrorReport>> {
+    if !config.params.metric_set().de {
+        return Ok(Vec::new());
+    }
+    let t0_s = t0_ns as f64 * 1e-9;
+    let params = config.drift_params(config.params.windows_m()[0]);
+    let aligned_t = aligned.times_s(t0_ns);
+    Ok(drift_error_windows(
+        ref_t,
+        ref_p,
+        &aligned_t,
+        &aligned.positions,
+        &params,
+        &config.params.windows_m(),
+    )
+    .map_err(|e| relabel(e, &est.label))?
+    .iter()
+    .map(|r| drift_report(r, t0_s))
+    .collect())
 }
 
 /// Names the estimate in an overlap error raised deep in the maths.
