@@ -274,6 +274,14 @@ impl EvalConfig {
         }
     }
 
+    /// Whether the pose fit refines the offset: searched by `auto` with `--offset-refine pose`
+    /// (it reads the estimate's orientations, where it has them).
+    pub fn pose_fit(&self) -> bool {
+        self.params.time_offset.is_none()
+            && self.params.offset_method() == crate::align::time_offset::OffsetMethod::Auto
+            && self.params.offset_refine() == crate::align::auto_offset::OffsetRefine::Pose
+    }
+
     /// The time-offset search's parameters.
     pub fn offset_params(&self) -> OffsetParams {
         OffsetParams {

@@ -57,8 +57,7 @@ impl Inputs {
 /// `--offset-method auto` (see [`crate::align::pose_fit`]), and whenever the reference's type is
 /// unknown before the pass. Half of what a 200 Hz odometry costs in memory.
 fn positions_only(config: &EvalConfig, source: &dyn crate::sources::Source) -> Vec<String> {
-    let pose_fit = config.params.time_offset.is_none()
-        && config.params.offset_method() == crate::align::time_offset::OffsetMethod::Auto;
+    let pose_fit = config.pose_fit();
     let needed_elsewhere = config.keep_orientations
         || pose_fit
         || config.export_aligned.is_some()

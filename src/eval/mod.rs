@@ -397,7 +397,7 @@ fn accepted_offset(
         implied_lever,
     } = searched;
     let posed = match est.trajectory.orientations.as_deref() {
-        Some(q) if config.params.offset_method() == OffsetMethod::Auto => {
+        Some(q) if config.pose_fit() => {
             pose_over_time(config, params, pair, q, o, &est.name, t0_ns)
         }
         _ => None,

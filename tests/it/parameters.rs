@@ -30,6 +30,7 @@ fn example(id: &str) -> Option<(&'static str, &'static str)> {
         "t_start" => ("5", "5.0"),
         "t_end" => ("60", "60.0"),
         "offset_model" => ("piecewise", "\"piecewise\""),
+        "offset_refine" => ("none", "\"none\""),
         "offset_window" => ("30", "30.0"),
         "offset_step" => ("5", "5.0"),
         "metrics" => ("de,kitti", "[\"de\", \"kitti\"]"),

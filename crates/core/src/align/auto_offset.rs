@@ -174,6 +174,18 @@ pub fn auto_time_offset(
     auto_time_offset_of(&Pair::new((ref_t, ref_p), (est_t, est_p), &cache), params)
 }
 
+/// `--offset-refine`: whether `auto` refines the signal searches' answer by the pose fit (when the
+/// estimate has orientations; see [`crate::align::pose_model`]), or keeps it (`none`: the paper's
+/// signals alone, and the estimate's orientations not read).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum OffsetRefine {
+    /// The pose fit refines the answer, the profile and the clock model.
+    #[default]
+    Pose,
+    /// The signal searches' answer stands.
+    None,
+}
+
 /// [`auto_time_offset`] over the signals of `pair` (each computed once, kept for the profile).
 pub fn auto_time_offset_of(pair: &Pair<'_>, params: &OffsetParams) -> Result<AutoOffset> {
     use rayon::prelude::*;

@@ -24,6 +24,7 @@ pub use value::{
     show_number, triple, Bound, DefaultValue, ParamSpec, ParamValue, Range, ValueKind, Word,
 };
 
+use crate::align::auto_offset::OffsetRefine;
 use crate::align::clock_model::{ModelChoice, OffsetModel};
 use crate::align::curvature::CurvatureParams;
 use crate::align::offset_profile::ProfileParams;
@@ -179,6 +180,9 @@ parameters! {
     /// Clock model of the time offset: constant, linear (a drift), piecewise (steps), or auto (chosen
     /// from the offset profile; constant unless the data refute it).
     offset_model: ModelChoice, "WORD", (default ModelChoice::Auto => offset_model), ();
+    /// How `--offset-method auto` refines its answer: pose (the pose fit, when the estimate has
+    /// orientations) or none (the signal searches' answer stands).
+    offset_refine: OffsetRefine, "WORD", (default OffsetRefine::default() => offset_refine), ();
     /// Window of the offset profile, seconds.
     offset_window: f64, "S", (otherwise "a tenth of the overlap, in 20–120 s"),
         (range > 0.0, <= 86_400.0, "s");
@@ -396,6 +400,16 @@ impl Word for ModelChoice {
     }
 }
 
+impl Word for OffsetRefine {
+    const ALL: &'static [Self] = &[OffsetRefine::Pose, OffsetRefine::None];
+    fn word(self) -> &'static str {
+        match self {
+            OffsetRefine::Pose => "pose",
+            OffsetRefine::None => "none",
+        }
+    }
+}
+
 impl Word for EvalMetric {
     const ALL: &'static [Self] = &[
         EvalMetric::De,
@@ -419,6 +433,7 @@ word_values!(
     LeverCorrection,
     OffsetMethod,
     ModelChoice,
+    OffsetRefine,
     EvalMetric
 );
 
