@@ -626,23 +626,7 @@ fn pose_over_time(
     )?;
     let t0_s = t0_ns as f64 * 1e-9;
     let model = &pc.model;
-    let mut warnings = Vec::new();
-    if config.params.forced_offset_model().is_none() {
-        let code = match model.model {
-            OffsetModel::Linear => Some(WarningCode::ClockDriftSuspected),
-            OffsetModel::Piecewise => Some(WarningCode::ClockStepSuspected),
-            OffsetModel::Constant => None,
-        };
-        if let Some(code) = code {
-            warnings.push(Warning {
-                code,
-                message: format!(
-                    "{name}: the clock offset is not constant — {}; the estimate's stamps were corrected by this model (force one with --offset-model)",
-                    model.reason
-                ),
-            });
-        }
-    }
+    let warnings = model_warnings(config, model, name);
     let (lever, lever_sigma) = pc.lever;
     let mut note = format!(
         "refined by the pose fit ({} windows of {:.0} s: Δt {:+.4} ± {:.4} s, the estimate's sensor at ({:+.2}, {:+.2}, {:+.2}) m from the reference's point, fitted alongside)",
@@ -682,6 +666,43 @@ fn pose_over_time(
         defined_fraction: None,
     };
     let report = TimeOffsetReport {
+        fitted_lever_m: Some([lever.x, lever.y, lever.z]),
+        fitted_lever_sigma_m: lever_sigma.map(|s| [s.x, s.y, s.z]),
+        ..model_report(model, &pc.profile, t0_s)
+    };
+    Some((report, warnings, note, entry))
+}
+
+/// The warnings of a non-constant clock model chosen from the data (none when one was forced).
+fn model_warnings(
+    config: &EvalConfig,
+    model: &crate::align::clock_model::ClockModel,
+    name: &str,
+) -> Vec<Warning> {
+    let code = match model.model {
+        OffsetModel::Linear => WarningCode::ClockDriftSuspected,
+        OffsetModel::Piecewise => WarningCode::ClockStepSuspected,
+        OffsetModel::Constant => return Vec::new(),
+    };
+    if config.params.forced_offset_model().is_some() {
+        return Vec::new();
+    }
+    vec![Warning {
+        code,
+        message: format!(
+            "{name}: the clock offset is not constant — {}; the estimate's stamps were corrected by this model (force one with --offset-model)",
+            model.reason
+        ),
+    }]
+}
+
+/// A clock model and its offset profile as the report's fields (times absolute: `t0_s` added).
+fn model_report(
+    model: &crate::align::clock_model::ClockModel,
+    profile: &crate::align::offset_profile::OffsetProfile,
+    t0_s: f64,
+) -> TimeOffsetReport {
+    TimeOffsetReport {
         offset_s: model.offset_s,
         sigma_s: Some(model.sigma_s),
         model: Some(model.model),
@@ -703,8 +724,7 @@ fn pose_over_time(
                 sigma_s: s.sigma_s,
             })
             .collect(),
-        profile: pc
-            .profile
+        profile: profile
             .windows
             .iter()
             .map(|w| OffsetProfilePoint {
@@ -714,13 +734,10 @@ fn pose_over_time(
                 correlation: w.correlation,
             })
             .collect(),
-        profile_window_s: Some(pc.profile.window_s),
-        profile_step_s: Some(pc.profile.step_s),
-        fitted_lever_m: Some([lever.x, lever.y, lever.z]),
-        fitted_lever_sigma_m: lever_sigma.map(|s| [s.x, s.y, s.z]),
+        profile_window_s: Some(profile.window_s),
+        profile_step_s: Some(profile.step_s),
         ..Default::default()
-    };
-    Some((report, warnings, note, entry))
+    }
 }
 
 /// The offset profile of the applied method around its whole-mission answer `o`, the clock model
@@ -756,58 +773,9 @@ fn over_time(
             Vec::new(),
         );
     };
-    let mut warnings = Vec::new();
-    if config.params.forced_offset_model().is_none() {
-        let code = match model.model {
-            OffsetModel::Linear => Some(WarningCode::ClockDriftSuspected),
-            OffsetModel::Piecewise => Some(WarningCode::ClockStepSuspected),
-            OffsetModel::Constant => None,
-        };
-        if let Some(code) = code {
-            warnings.push(Warning {
-                code,
-                message: format!(
-                    "{name}: the clock offset is not constant — {}; the estimate's stamps were corrected by this model (force one with --offset-model)",
-                    model.reason
-                ),
-            });
-        }
-    }
+    let warnings = model_warnings(config, &model, name);
     let report = TimeOffsetReport {
-        offset_s: model.offset_s,
-        sigma_s: Some(model.sigma_s),
-        model: Some(model.model),
-        model_reason: Some(model.reason.clone()),
-        drift_measured_ppm: model.drift_ppm,
-        drift_sigma_ppm: model.drift_sigma_ppm,
-        drift_ppm: model
-            .drift_ppm
-            .filter(|_| model.model == OffsetModel::Linear),
-        t_mid: (model.model == OffsetModel::Linear).then_some(model.t_mid + t0_s),
-        drift_resolution_ppm: model.drift_resolution_ppm,
-        segments: model
-            .segments
-            .iter()
-            .map(|s| OffsetSegmentReport {
-                t_start: s.t_start + t0_s,
-                t_end: s.t_end + t0_s,
-                offset_s: s.offset_s,
-                sigma_s: s.sigma_s,
-            })
-            .collect(),
-        profile: profile
-            .windows
-            .iter()
-            .map(|w| OffsetProfilePoint {
-                t: w.t + t0_s,
-                offset_s: w.offset_s,
-                sigma_s: w.sigma_s,
-                correlation: w.correlation,
-            })
-            .collect(),
-        profile_window_s: Some(profile.window_s),
-        profile_step_s: Some(profile.step_s),
-        ..Default::default()
+        ..model_report(&model, &profile, t0_s)
     };
     (report, warnings)
 }
