@@ -204,7 +204,9 @@ Examples:
 Examples:
   trajdrift validate                              # 10 missions of every kind: the calibration table
   trajdrift validate --missions 50 --kind legged,step --json grades.json
-  trajdrift validate --missions 3 --seed 100      # other seeds, a quick look";
+  trajdrift validate --missions 3 --seed 100      # other seeds, a quick look
+  # The accuracy to expect on your recording: 20 missions of its shape, known offsets injected
+  trajdrift validate --like fixtures/sim_ground/mission.mcap --reference /reference/position --estimate /estimate/odom --missions 20";
 
     pub const MAN: &str = "\
 Examples:
@@ -796,4 +798,16 @@ pub struct ValidateArgs {
     /// Write every mission's grade as JSON to FILE (`-` = stdout).
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+    /// Missions shaped like this recording instead (MCAP, ROS 1 bag, rosbag2 folder, several files of
+    /// one mission or a mission folder): its reference's route, both rates and noise levels, its
+    /// outages; known clock offsets injected. Needs --reference and --estimate.
+    #[arg(long, value_name = "RECORDING", num_args = 1.., conflicts_with = "kind",
+          requires_all = ["reference", "estimate"])]
+    pub like: Vec<PathBuf>,
+    /// With --like: the reference topic.
+    #[arg(long, value_name = "TOPIC", requires = "like")]
+    pub reference: Option<String>,
+    /// With --like: the estimate topic.
+    #[arg(long, value_name = "TOPIC", requires = "like")]
+    pub estimate: Option<String>,
 }

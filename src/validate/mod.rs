@@ -5,8 +5,10 @@
 //! in memory with all defaults — the same `eval::evaluate_loaded` as `trajdrift eval` — and
 //! graded against its clock's truth: the headline Δt's error and whether its σ covers it, each profile
 //! window's, the clock model chosen (a drift or step warning on a constant clock is a false alarm),
-//! the drift and the steps recovered. [`table`] prints the calibration table. (Missions shaped like
-//! the user's own recording, `--like`, are not built yet.)
+//! the drift and the steps recovered. [`table`] prints the calibration table. [`like`] does the same
+//! on missions shaped like the user's own recording (`trajdrift validate --like`).
+
+pub mod like;
 
 use rayon::prelude::*;
 
@@ -233,11 +235,16 @@ pub fn grade(truth: &dyn ClockTruth, report: &Report, t0_s: f64) -> MissionGrade
 
 /// Simulates and grades one mission.
 pub fn run_one(kind: MissionKind, seed: u64) -> MissionGrade {
-    let s = Scenario::draw(kind, seed);
+    run_scenario(&Scenario::draw(kind, seed))
+}
+
+/// Simulates and grades the mission `s`.
+pub fn run_scenario(s: &Scenario) -> MissionGrade {
+    let seed = s.seed;
     let m = s.simulate();
     let t0_s = START_NS as f64 * 1e-9;
     let mut g = match evaluate_pair(m.reference, m.estimate) {
-        Ok(report) => grade(&s, &report, t0_s),
+        Ok(report) => grade(s, &report, t0_s),
         Err(e) => MissionGrade {
             kind: String::new(),
             seed,
@@ -263,7 +270,7 @@ pub fn run_one(kind: MissionKind, seed: u64) -> MissionGrade {
             warnings: Vec::new(),
         },
     };
-    g.kind = kind.as_str().into();
+    g.kind = s.kind.as_str().into();
     g.seed = seed;
     g.legged = s.legged;
     g.ref_rate_hz = s.ref_rate_hz;

@@ -271,3 +271,65 @@ fn noise_bias() {
         }
     }
 }
+
+#[test]
+fn validate_like_reads_the_recording_s_shape_and_grades_missions_of_it() {
+    let dir = std::env::temp_dir().join(format!("trajdrift-like-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("like.json");
+    let fixture = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fixtures/sim_ground/mission.mcap"
+    );
+    let o = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+        .args(["validate", "--like", fixture])
+        .args([
+            "--reference",
+            "/reference/position",
+            "--estimate",
+            "/estimate/odom",
+        ])
+        .args(["--missions", "4", "--json"])
+        .arg(&json)
+        .output()
+        .expect("run trajdrift");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(table.contains("reference 10.0 Hz"), "{table}");
+    assert!(table.contains("estimate 20.0 Hz"), "{table}");
+    assert!(table.contains("| 4 | 4 |"), "{table}");
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(v["missions"].as_array().map(Vec::len), Some(4), "{v}");
+    assert_eq!(v["shape"]["legged"], false, "{v}");
+    for g in v["missions"].as_array().unwrap() {
+        assert_eq!(g["kind"], "like");
+        assert!(g["error_s"].as_f64().unwrap().abs() < 0.01, "{g}");
+    }
+    // --like needs both topics; an output over the input is refused.
+    let missing = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+        .args([
+            "validate",
+            "--like",
+            fixture,
+            "--reference",
+            "/reference/position",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(missing.status.code(), Some(2));
+    let over = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+        .args(["validate", "--like", fixture])
+        .args([
+            "--reference",
+            "/reference/position",
+            "--estimate",
+            "/estimate/odom",
+        ])
+        .args(["--json", fixture])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&over.stderr);
+    assert_eq!(over.status.code(), Some(2), "{err}");
+    assert!(err.contains("would destroy the input"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

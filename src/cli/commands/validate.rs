@@ -18,6 +18,9 @@ pub fn run(a: ValidateArgs) -> Result<u8> {
     if let Some(path) = &a.json {
         guard.claim("--json", path)?;
     }
+    if !a.like.is_empty() {
+        return like(&a, &mut guard);
+    }
     let options = ValidateOptions {
         per_kind: a.missions as usize,
         kinds: a.kind.clone(),
@@ -38,6 +41,59 @@ pub fn run(a: ValidateArgs) -> Result<u8> {
     }
     if !a.json.as_deref().is_some_and(is_stdout) {
         emit(&table(&grades))?;
+    }
+    Ok(EXIT_OK)
+}
+
+/// `--like`: missions shaped like the user's recording.
+fn like(a: &ValidateArgs, guard: &mut OutputGuard) -> Result<u8> {
+    use trajdrift::eval::config::{EvalConfig, NamedInput};
+    let files = trajdrift::audit::discover::expand_files(&a.like)?;
+    *guard = OutputGuard::new(a.like.iter().chain(&files));
+    if let Some(path) = &a.json {
+        guard.claim("--json", path)?;
+    }
+    let (Some(reference), Some(estimate)) = (&a.reference, &a.estimate) else {
+        anyhow::bail!("validate --like needs --reference TOPIC and --estimate TOPIC");
+    };
+    let mut config = EvalConfig::new(
+        a.like.first().cloned(),
+        NamedInput::topic(reference),
+        vec![NamedInput::topic(estimate)],
+    );
+    config.more_recordings = a.like.iter().skip(1).cloned().collect();
+    config.keep_orientations = true;
+    config.validate()?;
+    let total: u64 = a
+        .like
+        .iter()
+        .map(|p| trajdrift::sources::open::input_size(p))
+        .sum();
+    let read = ReadProgress::new(total, false);
+    let shape = trajdrift::validate::like::recording_shape(&config, &|b| read.update(b));
+    read.finish();
+    let shape = shape?;
+    let n = a.missions as usize;
+    let bar = ReadProgress::counting(n as u64, false, "missions");
+    let grades = trajdrift::validate::like::run_like(&shape, n, a.seed, &|_, _| bar.inc());
+    bar.finish();
+    if let Some(path) = &a.json {
+        guard.check("--json", path)?;
+        #[derive(serde::Serialize)]
+        struct Like<'a> {
+            shape: &'a trajdrift::simulate::like::Shape,
+            missions: &'a [trajdrift::validate::MissionGrade],
+        }
+        write_json(
+            path,
+            &Like {
+                shape: &shape,
+                missions: &grades,
+            },
+        )?;
+    }
+    if !a.json.as_deref().is_some_and(is_stdout) {
+        emit(&trajdrift::validate::like::like_table(&shape, &grades))?;
     }
     Ok(EXIT_OK)
 }

@@ -5,6 +5,7 @@
 //! README's first command runs on data we can regenerate and whose truth we know.
 
 pub mod grandtour;
+pub mod like;
 pub mod motion;
 pub(crate) mod ros1_definitions;
 pub mod scenario;
