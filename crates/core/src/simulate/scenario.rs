@@ -218,142 +218,50 @@ fn signed(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
 
 impl Scenario {
     /// The mission of `kind` drawn from `seed` (see the module doc for the ranges).
+    ///
+    /// Every draw takes the next numbers of one stream, so the order of the draws below is part of
+    /// the mission: reordering them changes every mission of every seed.
     pub fn draw(kind: MissionKind, seed: u64) -> Scenario {
         // The kind enters the stream too: seed 3 of two kinds are unrelated missions.
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ ((kind as u64 + 1) << 40));
-        let legged = match kind {
-            MissionKind::Legged | MissionKind::TurnsInPlace => true,
-            MissionKind::Drift | MissionKind::ShortDrift | MissionKind::Step => seed % 2 == 1,
-            MissionKind::NearStraight => false,
-            _ => rng.random::<f64>() < 0.3,
-        };
-        let duration_s = match kind {
-            MissionKind::Drift => uniform(&mut rng, 900.0, 1500.0),
-            MissionKind::ShortDrift => 300.0,
-            MissionKind::Step => uniform(&mut rng, 480.0, 720.0),
-            _ => uniform(&mut rng, 180.0, 480.0),
-        };
-        let spins = match kind {
-            MissionKind::TurnsInPlace => 0.25,
-            _ if legged => 0.05,
-            _ => 0.0,
-        };
-        let route = draw_route(&mut rng, legged, kind, spins, duration_s);
-        let gait = legged.then(|| Gait {
-            frequency_hz: uniform(&mut rng, 1.5, 2.5),
-            sway_m: uniform(&mut rng, 0.005, 0.02),
-            bob_m: uniform(&mut rng, 0.003, 0.008),
-            roll_rad: uniform(&mut rng, 0.5, 2.0).to_radians(),
-            pitch_rad: uniform(&mut rng, 0.3, 1.5).to_radians(),
-        });
-        let ref_rate_hz = if legged {
-            pick(&mut rng, &[5.0, 10.0, 10.0, 20.0, 20.0])
-        } else {
-            pick(&mut rng, &[1.0, 2.0, 5.0, 10.0, 10.0, 20.0])
-        };
-        let est_rate_hz = pick(&mut rng, &[10.0, 20.0, 50.0, 100.0, 200.0]);
-        let est_lever_m = if legged {
-            if rng.random::<f64>() < 0.35 {
-                // The mounting of the false step: 0.2 m ahead, 0.3 m above.
-                [0.2, 0.0, 0.3]
-            } else {
-                [
-                    uniform(&mut rng, -0.3, 0.3),
-                    uniform(&mut rng, -0.2, 0.2),
-                    uniform(&mut rng, 0.0, 0.4),
-                ]
-            }
-        } else {
-            [
-                uniform(&mut rng, -0.5, 0.5),
-                uniform(&mut rng, -0.5, 0.5),
-                uniform(&mut rng, 0.0, 0.5),
-            ]
-        };
-        let ref_lever_m = if rng.random::<f64>() < 0.3 {
-            [
-                uniform(&mut rng, -0.2, 0.2),
-                uniform(&mut rng, -0.2, 0.2),
-                uniform(&mut rng, 0.2, 0.8),
-            ]
-        } else {
-            [0.0; 3]
-        };
-        let outage_count = match kind {
-            MissionKind::GnssOutages => rng.random_range(2..=4),
-            _ if rng.random::<f64>() < 0.1 => 1,
-            _ => 0,
-        };
-        let mut outages = Vec::new();
-        for _ in 0..outage_count {
-            let len = uniform(&mut rng, 5.0, 20.0);
-            let at = uniform(&mut rng, 20.0, (duration_s - len - 20.0).max(21.0));
-            outages.push((at, at + len));
-        }
-        let receipt_latency_s = (kind == MissionKind::ReceiptStamps).then(|| {
-            (
-                uniform(&mut rng, 0.005, 0.03),
-                uniform(&mut rng, 0.001, 0.01),
-            )
-        });
+        let rng = &mut rng;
+        let legged = draw_legged(rng, kind, seed);
+        let duration_s = draw_duration_s(rng, kind);
+        let route = draw_route(rng, legged, kind, spin_share(kind, legged), duration_s);
+        let gait = legged.then(|| Gait::draw(rng));
+        let (ref_rate_hz, est_rate_hz) = draw_rates_hz(rng, legged);
+        let est_lever_m = draw_est_lever_m(rng, legged);
+        let ref_lever_m = draw_ref_lever_m(rng);
+        let outages = draw_outages(rng, kind, duration_s);
+        let receipt_latency_s =
+            (kind == MissionKind::ReceiptStamps).then(|| draw_receipt_latency_s(rng));
         let jumps = if kind == MissionKind::PositionJumps {
-            (0..rng.random_range(2..=3))
-                .map(|_| {
-                    let size = uniform(&mut rng, 0.3, 2.0);
-                    let dir = uniform(&mut rng, 0.0, std::f64::consts::TAU);
-                    (
-                        uniform(&mut rng, 30.0, duration_s - 30.0),
-                        [
-                            size * dir.cos(),
-                            size * dir.sin(),
-                            uniform(&mut rng, -0.1, 0.1),
-                        ],
-                    )
-                })
-                .collect()
+            draw_jumps(rng, duration_s)
         } else {
             Vec::new()
         };
-        let clock_drift_ppm = match kind {
-            MissionKind::Drift => signed(&mut rng, 40.0, 150.0),
-            MissionKind::ShortDrift => {
-                if rng.random::<bool>() {
-                    50.0
-                } else {
-                    -50.0
-                }
-            }
-            _ => 0.0,
-        };
-        let time_offset_s = uniform(&mut rng, -2.0, 2.0);
-        let clock_step = (kind == MissionKind::Step).then(|| ClockStep {
-            at_s: uniform(&mut rng, 0.3, 0.7) * duration_s,
-            offset_s: time_offset_s + signed(&mut rng, 0.1, 1.0),
-        });
+        let clock = EstimateClock::draw(rng, kind, duration_s);
+        let noise = Noise::draw(rng, legged);
         Scenario {
             kind,
             seed,
             legged,
             route,
             gait,
-            terrain_m: if legged {
-                uniform(&mut rng, 0.0, 1.0)
-            } else {
-                uniform(&mut rng, 0.0, 0.5)
-            },
+            terrain_m: noise.terrain_m,
             ref_rate_hz,
             est_rate_hz,
-            ref_noise_m: uniform(&mut rng, 0.005, 0.03),
-            ref_slow_noise_m: uniform(&mut rng, 0.0, 0.01),
-            est_noise_m: uniform(&mut rng, 0.001, 0.005),
-            est_attitude_noise_rad: uniform(&mut rng, 0.02, 0.1).to_radians(),
+            ref_noise_m: noise.ref_noise_m,
+            ref_slow_noise_m: noise.ref_slow_noise_m,
+            est_noise_m: noise.est_noise_m,
+            est_attitude_noise_rad: noise.est_attitude_noise_rad,
             ref_lever_m,
             est_lever_m,
-            time_offset_s,
-            clock_drift_ppm,
-            clock_step,
-            scale_error: uniform(&mut rng, -0.03, 0.03),
-            yaw_walk_deg_per_sqrt_s: uniform(&mut rng, 0.02, 0.1),
+            time_offset_s: clock.time_offset_s,
+            clock_drift_ppm: clock.drift_ppm,
+            clock_step: clock.step,
+            scale_error: noise.scale_error,
+            yaw_walk_deg_per_sqrt_s: noise.yaw_walk_deg_per_sqrt_s,
             outages,
             receipt_latency_s,
             jumps,
@@ -460,6 +368,201 @@ impl Scenario {
             reference,
             estimate,
             duration_s,
+        }
+    }
+}
+
+/// Whether the robot walks: always for the legged kinds, never nearly straight, by the seed's parity
+/// for the clock kinds (so their seeds alternate platforms), else 30 % of missions (one draw).
+fn draw_legged(rng: &mut ChaCha8Rng, kind: MissionKind, seed: u64) -> bool {
+    match kind {
+        MissionKind::Legged | MissionKind::TurnsInPlace => true,
+        MissionKind::Drift | MissionKind::ShortDrift | MissionKind::Step => seed % 2 == 1,
+        MissionKind::NearStraight => false,
+        _ => rng.random::<f64>() < 0.3,
+    }
+}
+
+/// The mission's length, seconds: 15–25 minutes for a drift, 5 for a short drift, 8–12 for a step,
+/// else 3–8 minutes.
+fn draw_duration_s(rng: &mut ChaCha8Rng, kind: MissionKind) -> f64 {
+    match kind {
+        MissionKind::Drift => uniform(rng, 900.0, 1500.0),
+        MissionKind::ShortDrift => 300.0,
+        MissionKind::Step => uniform(rng, 480.0, 720.0),
+        _ => uniform(rng, 180.0, 480.0),
+    }
+}
+
+/// The share of the route's legs that are turns in place (no draw).
+fn spin_share(kind: MissionKind, legged: bool) -> f64 {
+    match kind {
+        MissionKind::TurnsInPlace => 0.25,
+        _ if legged => 0.05,
+        _ => 0.0,
+    }
+}
+
+impl Gait {
+    /// A trotting gait: 1.5–2.5 Hz, centimetre sway and bob, a degree or two of roll and pitch.
+    fn draw(rng: &mut ChaCha8Rng) -> Gait {
+        Gait {
+            frequency_hz: uniform(rng, 1.5, 2.5),
+            sway_m: uniform(rng, 0.005, 0.02),
+            bob_m: uniform(rng, 0.003, 0.008),
+            roll_rad: uniform(rng, 0.5, 2.0).to_radians(),
+            pitch_rad: uniform(rng, 0.3, 1.5).to_radians(),
+        }
+    }
+}
+
+/// The reference's and the estimate's rates, Hz (a legged robot's reference is a prism or an INS,
+/// never a 1 Hz GNSS).
+fn draw_rates_hz(rng: &mut ChaCha8Rng, legged: bool) -> (f64, f64) {
+    let ref_rate_hz = if legged {
+        pick(rng, &[5.0, 10.0, 10.0, 20.0, 20.0])
+    } else {
+        pick(rng, &[1.0, 2.0, 5.0, 10.0, 10.0, 20.0])
+    };
+    let est_rate_hz = pick(rng, &[10.0, 20.0, 50.0, 100.0, 200.0]);
+    (ref_rate_hz, est_rate_hz)
+}
+
+/// The estimate sensor's lever arm in the body frame, metres (vertical ones included).
+fn draw_est_lever_m(rng: &mut ChaCha8Rng, legged: bool) -> [f64; 3] {
+    if legged {
+        if rng.random::<f64>() < 0.35 {
+            // The mounting of the false step: 0.2 m ahead, 0.3 m above.
+            [0.2, 0.0, 0.3]
+        } else {
+            [
+                uniform(rng, -0.3, 0.3),
+                uniform(rng, -0.2, 0.2),
+                uniform(rng, 0.0, 0.4),
+            ]
+        }
+    } else {
+        [
+            uniform(rng, -0.5, 0.5),
+            uniform(rng, -0.5, 0.5),
+            uniform(rng, 0.0, 0.5),
+        ]
+    }
+}
+
+/// The reference sensor's lever arm, metres: at the body's point in 70 % of missions, else a mast.
+fn draw_ref_lever_m(rng: &mut ChaCha8Rng) -> [f64; 3] {
+    if rng.random::<f64>() < 0.3 {
+        [
+            uniform(rng, -0.2, 0.2),
+            uniform(rng, -0.2, 0.2),
+            uniform(rng, 0.2, 0.8),
+        ]
+    } else {
+        [0.0; 3]
+    }
+}
+
+/// Reference outages of 5–20 s, true seconds from the start: two to four for the outage kind, one
+/// in 10 % of the other missions.
+fn draw_outages(rng: &mut ChaCha8Rng, kind: MissionKind, duration_s: f64) -> Vec<(f64, f64)> {
+    let outage_count = match kind {
+        MissionKind::GnssOutages => rng.random_range(2..=4),
+        _ if rng.random::<f64>() < 0.1 => 1,
+        _ => 0,
+    };
+    let mut outages = Vec::new();
+    for _ in 0..outage_count {
+        let len = uniform(rng, 5.0, 20.0);
+        let at = uniform(rng, 20.0, (duration_s - len - 20.0).max(21.0));
+        outages.push((at, at + len));
+    }
+    outages
+}
+
+/// The mean receipt latencies of the reference's and of the estimate's stamps, seconds.
+fn draw_receipt_latency_s(rng: &mut ChaCha8Rng) -> (f64, f64) {
+    (uniform(rng, 0.005, 0.03), uniform(rng, 0.001, 0.01))
+}
+
+/// Two or three position jumps of the estimate (a localiser correcting itself): true time, and a
+/// jump of 0.3–2 m in its frame.
+fn draw_jumps(rng: &mut ChaCha8Rng, duration_s: f64) -> Vec<(f64, [f64; 3])> {
+    (0..rng.random_range(2..=3))
+        .map(|_| {
+            let size = uniform(rng, 0.3, 2.0);
+            let dir = uniform(rng, 0.0, std::f64::consts::TAU);
+            (
+                uniform(rng, 30.0, duration_s - 30.0),
+                [size * dir.cos(), size * dir.sin(), uniform(rng, -0.1, 0.1)],
+            )
+        })
+        .collect()
+}
+
+/// The estimate's clock as drawn: its rate error, its Δt at the start and its step.
+struct EstimateClock {
+    drift_ppm: f64,
+    time_offset_s: f64,
+    step: Option<ClockStep>,
+}
+
+impl EstimateClock {
+    /// The clock of `kind`: a rate error for the drift kinds, a step of 0.1–1 s in the middle of a
+    /// step mission, a Δt of ±2 s for every mission.
+    fn draw(rng: &mut ChaCha8Rng, kind: MissionKind, duration_s: f64) -> EstimateClock {
+        let drift_ppm = match kind {
+            MissionKind::Drift => signed(rng, 40.0, 150.0),
+            MissionKind::ShortDrift => {
+                if rng.random::<bool>() {
+                    50.0
+                } else {
+                    -50.0
+                }
+            }
+            _ => 0.0,
+        };
+        let time_offset_s = uniform(rng, -2.0, 2.0);
+        let step = (kind == MissionKind::Step).then(|| ClockStep {
+            at_s: uniform(rng, 0.3, 0.7) * duration_s,
+            offset_s: time_offset_s + signed(rng, 0.1, 1.0),
+        });
+        EstimateClock {
+            drift_ppm,
+            time_offset_s,
+            step,
+        }
+    }
+}
+
+/// The terrain and the sensors' errors, drawn last (in this field order).
+struct Noise {
+    terrain_m: f64,
+    ref_noise_m: f64,
+    ref_slow_noise_m: f64,
+    est_noise_m: f64,
+    est_attitude_noise_rad: f64,
+    scale_error: f64,
+    yaw_walk_deg_per_sqrt_s: f64,
+}
+
+impl Noise {
+    /// Rolling terrain (rougher where a legged robot walks), the reference's white and slow noise,
+    /// the estimate's white position and attitude noise, scale error and heading random walk.
+    fn draw(rng: &mut ChaCha8Rng, legged: bool) -> Noise {
+        let terrain_m = if legged {
+            uniform(rng, 0.0, 1.0)
+        } else {
+            uniform(rng, 0.0, 0.5)
+        };
+        Noise {
+            terrain_m,
+            ref_noise_m: uniform(rng, 0.005, 0.03),
+            ref_slow_noise_m: uniform(rng, 0.0, 0.01),
+            est_noise_m: uniform(rng, 0.001, 0.005),
+            est_attitude_noise_rad: uniform(rng, 0.02, 0.1).to_radians(),
+            scale_error: uniform(rng, -0.03, 0.03),
+            yaw_walk_deg_per_sqrt_s: uniform(rng, 0.02, 0.1),
         }
     }
 }
