@@ -291,27 +291,52 @@ impl Scenario {
         let duration_s = body.duration_s();
         let lever = |l: [f64; 3]| Vector3::new(l[0], l[1], l[2]);
         let (ref_lever, est_lever) = (lever(self.ref_lever_m), lever(self.est_lever_m));
+        let (ref_latency, est_latency) = self.receipt_latencies();
+        // One stream of draws: the reference's first, then the estimate's.
+        let reference = self.sample_reference(&mut rng, &body, &ref_lever, ref_latency);
+        let estimate = self.sample_estimate(&mut rng, &body, &est_lever, est_latency);
+        ScenarioMission {
+            scenario: self.clone(),
+            reference,
+            estimate,
+            duration_s,
+        }
+    }
 
-        // The reference: white noise plus a first-order Gauss–Markov error (τ = 30 s).
+    /// The exponential receipt latencies of the reference's and of the estimate's stamps (none
+    /// without receipt stamps, or at a mean of 0).
+    fn receipt_latencies(&self) -> (Option<Exp<f64>>, Option<Exp<f64>>) {
+        let exp = |mean: f64| (mean > 0.0).then(|| Exp::new(1.0 / mean).ok()).flatten();
+        self.receipt_latency_s
+            .map_or((None, None), |(r, e)| (exp(r), exp(e)))
+    }
+
+    /// The reference: its sensor's positions at its rate from a random phase, with white noise plus
+    /// a first-order Gauss–Markov error (τ = 30 s), stamped at receipt when `latency` is given. In
+    /// an outage nothing is published, but the sample's noise is still drawn.
+    fn sample_reference(
+        &self,
+        rng: &mut ChaCha8Rng,
+        body: &Body,
+        lever: &Vector3<f64>,
+        latency: Option<Exp<f64>>,
+    ) -> Trajectory {
+        let duration_s = body.duration_s();
         let mut reference = Trajectory::new(false);
         let ref_phase = rng.random::<f64>() / self.ref_rate_hz;
         let n_ref = ((duration_s - ref_phase) * self.ref_rate_hz).floor() as usize + 1;
         let tau = 30.0;
         let mut slow = Vector3::zeros();
-        let exp = |mean: f64| (mean > 0.0).then(|| Exp::new(1.0 / mean).ok()).flatten();
-        let (ref_lat, est_lat) = self
-            .receipt_latency_s
-            .map_or((None, None), |(r, e)| (exp(r), exp(e)));
         for i in 0..n_ref {
             let t = ref_phase + i as f64 / self.ref_rate_hz;
             let a = (-1.0 / (self.ref_rate_hz * tau)).exp();
-            slow = slow * a + white(&mut rng, self.ref_slow_noise_m * (1.0 - a * a).sqrt());
-            let noise = white(&mut rng, self.ref_noise_m);
-            let late = ref_lat.map_or(0.0, |d| d.sample(&mut rng));
+            slow = slow * a + white(rng, self.ref_slow_noise_m * (1.0 - a * a).sqrt());
+            let noise = white(rng, self.ref_noise_m);
+            let late = latency.map_or(0.0, |d| d.sample(rng));
             if self.outages.iter().any(|&(a, b)| t >= a && t <= b) {
                 continue;
             }
-            let (p, _) = body.sensor(t, &ref_lever);
+            let (p, _) = body.sensor(t, lever);
             reference.push(
                 START_NS + ((t + late) * 1e9).round() as i64,
                 p + noise + slow,
@@ -319,13 +344,25 @@ impl Scenario {
             );
         }
         reference.sort_dedup();
+        reference
+    }
 
-        // The estimate: increments of its sensor's true path, scaled and turned by a heading random
-        // walk, in a gravity-aligned frame that starts at its sensor with the body's heading.
+    /// The estimate: increments of its sensor's true path, scaled and turned by a heading random
+    /// walk, in a gravity-aligned frame that starts at its sensor with the body's heading; with its
+    /// position jumps, white position and attitude noise, stamped on its own clock
+    /// ([`Scenario::estimate_stamp_ns`]).
+    fn sample_estimate(
+        &self,
+        rng: &mut ChaCha8Rng,
+        body: &Body,
+        lever: &Vector3<f64>,
+        latency: Option<Exp<f64>>,
+    ) -> Trajectory {
+        let duration_s = body.duration_s();
         let mut estimate = Trajectory::new(true);
         let est_phase = rng.random::<f64>() / self.est_rate_hz;
         let n_est = ((duration_s - est_phase) * self.est_rate_hz).floor() as usize + 1;
-        let (p0, _) = body.sensor(est_phase, &est_lever);
+        let (p0, _) = body.sensor(est_phase, lever);
         let frame = Rotation3::from_axis_angle(&Vector3::z_axis(), -body.yaw_at(est_phase));
         let walk = self.yaw_walk_deg_per_sqrt_s.to_radians() / self.est_rate_hz.sqrt();
         let (mut yaw_err, mut pos, mut last) = (0.0f64, Vector3::zeros(), p0);
@@ -335,40 +372,40 @@ impl Scenario {
         let mut next_jump = 0;
         for j in 0..n_est {
             let t = est_phase + j as f64 / self.est_rate_hz;
-            let (p, r) = body.sensor(t, &est_lever);
+            let (p, r) = body.sensor(t, lever);
             let drift = Rotation3::from_axis_angle(&Vector3::z_axis(), yaw_err);
             pos += drift * (frame * (p - last)) * (1.0 + self.scale_error);
             last = p;
-            yaw_err += walk * gauss(&mut rng);
+            yaw_err += walk * gauss(rng);
             while next_jump < jumps.len() && jumps[next_jump].0 <= t {
                 let d = jumps[next_jump].1;
                 jumped += Vector3::new(d[0], d[1], d[2]);
                 next_jump += 1;
             }
-            let attitude = Rotation3::new(white(&mut rng, self.est_attitude_noise_rad));
+            let attitude = Rotation3::new(white(rng, self.est_attitude_noise_rad));
             let orientation = drift * frame * r * attitude;
-            let noise = white(&mut rng, self.est_noise_m);
-            let t_clock = t * (1.0 + self.clock_drift_ppm * 1e-6);
-            let offset = match self.clock_step {
-                Some(s) if t >= s.at_s => s.offset_s,
-                _ => self.time_offset_s,
-            };
-            let late = est_lat.map_or(0.0, |d| d.sample(&mut rng));
-            let stamp = START_NS + ((t_clock - offset + late) * 1e9).round() as i64;
+            let noise = white(rng, self.est_noise_m);
+            let late = latency.map_or(0.0, |d| d.sample(rng));
             estimate.push(
-                stamp,
+                self.estimate_stamp_ns(t, late),
                 pos + jumped + noise,
                 Some(UnitQuaternion::from_rotation_matrix(&orientation)),
             );
         }
         // A backward clock step repeats a stretch of stamps: the recorder keeps them in order.
         estimate.sort_dedup();
-        ScenarioMission {
-            scenario: self.clone(),
-            reference,
-            estimate,
-            duration_s,
-        }
+        estimate
+    }
+
+    /// The estimate's stamp of true time `t` (seconds from the start), ns since the epoch: its clock
+    /// (rate error, then the offset or the step) plus a receipt latency `late_s`.
+    fn estimate_stamp_ns(&self, t: f64, late_s: f64) -> i64 {
+        let t_clock = t * (1.0 + self.clock_drift_ppm * 1e-6);
+        let offset = match self.clock_step {
+            Some(s) if t >= s.at_s => s.offset_s,
+            _ => self.time_offset_s,
+        };
+        START_NS + ((t_clock - offset + late_s) * 1e9).round() as i64
     }
 }
 
