@@ -36,6 +36,7 @@ use crate::error::{Error, Result};
 use crate::simulate::ros1_definitions::{definition, md5sum};
 use crate::simulate::Mission;
 use crate::sources::bag::writer::{BagCompression, BagWriter};
+use crate::trajectory::Trajectory;
 
 /// The INS solution (the `grandtour` preset's reference).
 pub const INS_TOPIC: &str = "/boxi/inertial_explorer/tc/odometry";
@@ -176,8 +177,18 @@ fn messages(mission: &Mission) -> Vec<Message> {
         )
     };
     let (est_lever, ref_lever) = (lever(c.est_lever_m), lever(c.ref_lever_m));
-    let t0 = c.start_time_ns;
-    let mut out = vec![Message {
+    let mut out = vec![static_transforms(c.start_time_ns, &est_lever, &ref_lever)];
+    push_reference(&mut out, &mission.reference);
+    push_estimate(&mut out, &mission.estimate, &est_lever);
+    // Stable: messages of one stamp keep the order they were pushed in.
+    out.sort_by_key(|m| m.time);
+    out
+}
+
+/// `_tf_minimal.bag`'s `/tf_static` at `t0`: the base to the lidar (the estimate's sensor), the prism
+/// and the INS (both at the reference's lever).
+fn static_transforms(t0: i64, est_lever: &Isometry3<f64>, ref_lever: &Isometry3<f64>) -> Message {
+    Message {
         time: t0,
         bag: GrandTourBag::TfMinimal,
         topic: "/tf_static",
@@ -186,18 +197,21 @@ fn messages(mission: &Mission) -> Vec<Message> {
             0,
             &TFMessage {
                 transforms: vec![
-                    transform(t0, "base", "hesai_lidar", &est_lever),
-                    transform(t0, "base", "prism", &ref_lever),
-                    transform(t0, "base", "cpt7_imu", &ref_lever),
+                    transform(t0, "base", "hesai_lidar", est_lever),
+                    transform(t0, "base", "prism", ref_lever),
+                    transform(t0, "base", "cpt7_imu", ref_lever),
                 ],
             },
         ),
-    }];
-    for (i, (&t, p)) in mission
-        .reference
+    }
+}
+
+/// The reference's samples, each twice: the INS odometry and the prism position.
+fn push_reference(out: &mut Vec<Message>, reference: &Trajectory) {
+    for (i, (&t, p)) in reference
         .stamps_ns
         .iter()
-        .zip(&mission.reference.positions)
+        .zip(&reference.positions)
         .enumerate()
     {
         let pose = Isometry3::from_parts(Translation3::from(*p), UnitQuaternion::identity());
@@ -222,12 +236,16 @@ fn messages(mission: &Mission) -> Vec<Message> {
             ),
         });
     }
-    let orientations = mission.estimate.orientations.as_deref().unwrap_or(&[]);
-    for (i, (&t, p)) in mission
-        .estimate
+}
+
+/// The estimate's samples, each three times: DLIO's lidar odometry, its `/tf` edge to the base
+/// (`est_lever` away) and the state estimator's base odometry.
+fn push_estimate(out: &mut Vec<Message>, estimate: &Trajectory, est_lever: &Isometry3<f64>) {
+    let orientations = estimate.orientations.as_deref().unwrap_or(&[]);
+    for (i, (&t, p)) in estimate
         .stamps_ns
         .iter()
-        .zip(&mission.estimate.positions)
+        .zip(&estimate.positions)
         .enumerate()
     {
         let q = orientations
@@ -263,8 +281,6 @@ fn messages(mission: &Mission) -> Vec<Message> {
             data: odometry(i as u32, t, "odom", "base", &base),
         });
     }
-    out.sort_by_key(|m| m.time);
-    out
 }
 
 /// A `sensor_msgs/PointCloud2` of `n` opaque bytes.
