@@ -14,6 +14,7 @@ pub mod sweep;
 use rayon::prelude::*;
 
 use crate::align::auto_offset::auto_time_offset_of;
+use crate::align::auto_params::AutoParams;
 use crate::align::clock_model::{clock_model_of, OffsetModel};
 use crate::align::time_offset::{
     estimate_time_offset_cached, OffsetEstimate, OffsetMethod, OffsetStatus, Pair, SignalCache,
@@ -23,13 +24,16 @@ use crate::diag::{Warning, WarningCode};
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::{drift_error_windows, DriftErrorResult, DriftWindow};
 use crate::report::json::{
-    AutoParameters, DriftErrorReport, EstimateReport, Input, MethodStatus, OffsetMethodReport,
-    OffsetProfilePoint, OffsetSegmentReport, OffsetSource, Parameters, Report, TimeOffsetReport,
-    TimeOffsetStatus, Tool, TopicReport, SCHEMA_VERSION,
+    AutoParameters, DriftErrorReport, EstimateReport, ExtrinsicsReport, Input, MethodStatus,
+    OffsetMethodReport, OffsetProfilePoint, OffsetSegmentReport, OffsetSource, Parameters, Report,
+    TimeOffsetReport, TimeOffsetStatus, Tool, TopicReport, SCHEMA_VERSION,
 };
 use crate::sources::Progress;
 use config::EvalConfig;
 use inputs::{load, Inputs, Loaded};
+
+/// The crop's bounds (`--t-start`, `--t-end`), ns since the epoch; `None`: open.
+type CropNs = (Option<i64>, Option<i64>);
 
 /// The longest time span of the loaded trajectories, seconds (what the offset search grids).
 fn data_span_s(inputs: &Inputs) -> f64 {
@@ -59,10 +63,29 @@ pub fn evaluate_with_inputs(
 }
 
 /// The evaluation of inputs already read with [`load`] for `config` (a sweep reads the recording once
-/// and evaluates it at many parameter values; none of those change what is read).
+/// and evaluates it at many parameter values; none of those change what is read): the inputs made
+/// ready ([`crop_inputs`]), each estimate evaluated ([`evaluate_estimates`]), the report assembled
+/// ([`assemble_report`]).
 pub fn evaluate_loaded(config: &EvalConfig, mut inputs: Inputs) -> Result<(Report, Inputs)> {
     config.validate()?;
     let levers = extrinsics::apply_levers(&inputs.reference, &mut inputs.estimates)?;
+    let (t0_ns, crop_ns) = crop_inputs(config, &mut inputs)?;
+    // `--platform auto`: ε and the curvature Δt_max from the reference's own noise and speed.
+    let reference = &inputs.reference.trajectory;
+    let auto = config.measure(&reference.times_s(t0_ns), &reference.positions);
+    let auto_names = config.auto_parameter_names();
+    let resolved = config.resolved(&auto);
+    let config = &resolved;
+    let evaluated = evaluate_estimates(config, &inputs, t0_ns, crop_ns, levers)?;
+    let report = assemble_report(config, &inputs, &auto, auto_names, crop_ns, evaluated);
+    Ok((report, inputs))
+}
+
+/// The inputs made ready for the evaluation: the reference cropped to `--t-start`/`--t-end`
+/// (seconds from its first stamp, or absolute from 1e8 s on), every trajectory checked for enough
+/// samples, and a search's size checked against the data's span. Returns the time origin (the
+/// reference's first stamp before the crop) and the crop's bounds, ns.
+fn crop_inputs(config: &EvalConfig, inputs: &mut Inputs) -> Result<(i64, CropNs)> {
     let reference = &mut inputs.reference;
     let t0_ns = reference.trajectory.stamps_ns.first().copied().unwrap_or(0);
     let crop = |v: Option<f64>| {
@@ -77,7 +100,6 @@ pub fn evaluate_loaded(config: &EvalConfig, mut inputs: Inputs) -> Result<(Repor
     let (crop_start, crop_end) = (crop(config.params.t_start), crop(config.params.t_end));
     reference.trajectory.crop(crop_start, crop_end);
     require_samples(&inputs.path, reference)?;
-    let reference = &inputs.reference;
     for e in &inputs.estimates {
         require_samples(&inputs.path, e)?;
     }
@@ -85,34 +107,38 @@ pub fn evaluate_loaded(config: &EvalConfig, mut inputs: Inputs) -> Result<(Repor
         crate::params::check_search_size(
             config.params.max_offset_s(),
             config.params.grid_s(),
-            data_span_s(&inputs),
+            data_span_s(inputs),
         )?;
     }
-    // `--platform auto`: ε and the curvature Δt_max from the reference's own noise and speed.
-    let auto = config.measure(
-        &reference.trajectory.times_s(t0_ns),
-        &reference.trajectory.positions,
-    );
-    let auto_names = config.auto_parameter_names();
-    let resolved = config.resolved(&auto);
-    let config = &resolved;
+    Ok((t0_ns, (crop_start, crop_end)))
+}
 
+/// Every estimate evaluated against the reference (in parallel), its extrinsics from `levers`
+/// attached: the estimates' reports and their warnings, in input order (the first failure in that
+/// order is the error).
+fn evaluate_estimates(
+    config: &EvalConfig,
+    inputs: &Inputs,
+    t0_ns: i64,
+    crop_ns: CropNs,
+    levers: Vec<Option<ExtrinsicsReport>>,
+) -> Result<(Vec<EstimateReport>, Vec<Warning>)> {
     let results: Vec<Result<(EstimateReport, Vec<Warning>)>> = inputs
         .estimates
         .par_iter()
         .map(|est| {
             evaluate_estimate(
                 config,
-                reference,
+                &inputs.reference,
                 est,
                 t0_ns,
-                (crop_start, crop_end),
+                crop_ns,
                 inputs.estimates.len(),
             )
         })
         .collect();
     let mut estimates = Vec::with_capacity(results.len());
-    let mut warnings = inputs.warnings.clone();
+    let mut warnings = Vec::new();
     for r in results {
         let (e, w) = r?;
         estimates.push(e);
@@ -121,42 +147,30 @@ pub fn evaluate_loaded(config: &EvalConfig, mut inputs: Inputs) -> Result<(Repor
     for (e, x) in estimates.iter_mut().zip(levers) {
         e.extrinsics = x;
     }
-    let to_s = |ns: Option<i64>| ns.map(|t| t as f64 * 1e-9);
-    let report = Report {
+    Ok((estimates, warnings))
+}
+
+/// The report of an evaluation: the input, the parameters used, the reference, the estimates, and
+/// the warnings (the inputs' first, then the estimates').
+fn assemble_report(
+    config: &EvalConfig,
+    inputs: &Inputs,
+    auto: &AutoParams,
+    auto_names: Vec<String>,
+    crop_ns: CropNs,
+    (estimates, estimate_warnings): (Vec<EstimateReport>, Vec<Warning>),
+) -> Report {
+    let mut warnings = inputs.warnings.clone();
+    warnings.extend(estimate_warnings);
+    let reference = &inputs.reference;
+    Report {
         schema_version: SCHEMA_VERSION,
         tool: Tool::default(),
         input: Input {
             path: inputs.path.clone(),
             bytes: inputs.bytes,
         },
-        parameters: Parameters {
-            platform: config.params.platform(),
-            curvature_eps_m: config.params.curvature_eps_m(),
-            path_eps_m: config.params.path_eps_m(),
-            theta_max_rad: config.params.theta_max_rad(),
-            dt_max_s: config.params.dt_max_s(),
-            windows_m: config.params.windows_m().clone(),
-            overlap: config.params.overlap(),
-            lever_arm_m: config.params.lever_arm_m(),
-            lever_correction: config.params.lever_correction(),
-            max_offset_s: config.params.max_offset_s(),
-            grid_s: config.params.grid_s(),
-            offset_method: config.params.offset_method(),
-            time_offset_s: config.params.time_offset,
-            stamp: config.params.stamp(),
-            origin: config.params.origin,
-            t_start: to_s(crop_start),
-            t_end: to_s(crop_end),
-            curvature_dt_max_s: config.curvature_dt_max_s,
-            reference_noise_m: auto.reference_noise_m,
-            auto: (!auto_names.is_empty()).then(|| AutoParameters {
-                chosen: auto_names.clone(),
-                reference_noise_m: auto.reference_noise_m,
-                mean_speed_mps: auto.mean_speed_mps,
-                slow_speed_mps: auto.slow_speed_mps,
-                rules: "curvature_eps = sqrt(sigma / 0.005 m^-1) in [0.1, 5] m; path_eps = 50 sigma in [0.1, min window / 5] m; curvature_dt_max = 1.5 curvature_eps / slow speed in [dt_max, 30] s".into(),
-            }),
-        },
+        parameters: parameters_report(config, auto, auto_names, crop_ns),
         reference: TopicReport {
             topic: reference.label.clone(),
             type_name: reference.type_name.clone(),
@@ -167,8 +181,46 @@ pub fn evaluate_loaded(config: &EvalConfig, mut inputs: Inputs) -> Result<(Repor
         },
         estimates,
         warnings,
-    };
-    Ok((report, inputs))
+    }
+}
+
+/// The report's parameters: every value the evaluation used (the resolved ones: `auto` measured),
+/// the crop in seconds, and what `--platform auto` measured and by which rules.
+fn parameters_report(
+    config: &EvalConfig,
+    auto: &AutoParams,
+    auto_names: Vec<String>,
+    (crop_start, crop_end): CropNs,
+) -> Parameters {
+    let to_s = |ns: Option<i64>| ns.map(|t| t as f64 * 1e-9);
+    Parameters {
+        platform: config.params.platform(),
+        curvature_eps_m: config.params.curvature_eps_m(),
+        path_eps_m: config.params.path_eps_m(),
+        theta_max_rad: config.params.theta_max_rad(),
+        dt_max_s: config.params.dt_max_s(),
+        windows_m: config.params.windows_m().clone(),
+        overlap: config.params.overlap(),
+        lever_arm_m: config.params.lever_arm_m(),
+        lever_correction: config.params.lever_correction(),
+        max_offset_s: config.params.max_offset_s(),
+        grid_s: config.params.grid_s(),
+        offset_method: config.params.offset_method(),
+        time_offset_s: config.params.time_offset,
+        stamp: config.params.stamp(),
+        origin: config.params.origin,
+        t_start: to_s(crop_start),
+        t_end: to_s(crop_end),
+        curvature_dt_max_s: config.curvature_dt_max_s,
+        reference_noise_m: auto.reference_noise_m,
+        auto: (!auto_names.is_empty()).then(|| AutoParameters {
+            chosen: auto_names,
+            reference_noise_m: auto.reference_noise_m,
+            mean_speed_mps: auto.mean_speed_mps,
+            slow_speed_mps: auto.slow_speed_mps,
+            rules: "curvature_eps = sqrt(sigma / 0.005 m^-1) in [0.1, 5] m; path_eps = 50 sigma in [0.1, min window / 5] m; curvature_dt_max = 1.5 curvature_eps / slow speed in [dt_max, 30] s".into(),
+        }),
+    }
 }
 
 fn require_samples(path: &str, t: &Loaded) -> Result<()> {
@@ -212,7 +264,7 @@ fn evaluate_estimate(
     reference: &Loaded,
     est: &Loaded,
     t0_ns: i64,
-    crop: (Option<i64>, Option<i64>),
+    crop: CropNs,
     n_estimates: usize,
 ) -> Result<(EstimateReport, Vec<Warning>)> {
     let ref_t = reference.trajectory.times_s(t0_ns);
