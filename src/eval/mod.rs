@@ -640,35 +640,13 @@ fn pose_over_time(
     name: &str,
     t0_ns: i64,
 ) -> Option<(TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport)> {
-    use crate::align::pose_fit::{PoseData, PoseFitParams, PoseTrack};
     use crate::align::pose_model::pose_clock_model;
-    use crate::align::time_offset::SignalView;
-    let (ref_t, ref_p) = pair.reference;
-    let (est_t, est_p) = pair.estimate;
-    let data = PoseData {
-        ref_t,
-        ref_p,
-        estimate: PoseTrack {
-            t: est_t,
-            p: est_p,
-            q: orientations,
-        },
-        params: PoseFitParams {
-            max_gap_s: params.max_gap_s.unwrap_or(params.curvature.dt_max_s),
-            window_s: None,
-        },
-    };
+    let data = pose_data(params, pair, orientations);
     // The speed signals locate a step's time (computed already by `auto`).
     let speed =
         crate::align::time_offset::prepared_signals(OffsetMethod::Speed, pair, params, o.offset_s)
             .ok();
-    let views = speed.as_ref().map(|((r, e), lever)| {
-        let e = match lever {
-            Some(d) => SignalView::with_lever(e, *d),
-            None => SignalView::of(e),
-        };
-        (SignalView::of(r), e)
-    });
+    let views = speed.as_ref().map(speed_views);
     let pc = pose_clock_model(
         &data,
         o.offset_s,
@@ -680,6 +658,59 @@ fn pose_over_time(
     let model = &pc.model;
     let warnings = model_warnings(config, model, name);
     let (lever, lever_sigma) = pc.lever;
+    let report = TimeOffsetReport {
+        fitted_lever_m: Some([lever.x, lever.y, lever.z]),
+        fitted_lever_sigma_m: lever_sigma.map(|s| [s.x, s.y, s.z]),
+        ..model_report(model, &pc.profile, t0_s)
+    };
+    Some((report, warnings, pose_note(&pc), pose_entry(&pc)))
+}
+
+/// What the pose fit works on: the pair's positions and the estimate's `orientations`, its gaps
+/// bounded like the signal searches' (`max_gap_s`, else the curvature's Δt_max).
+fn pose_data<'a>(
+    params: &crate::align::time_offset::OffsetParams,
+    pair: &Pair<'a>,
+    orientations: &'a [nalgebra::UnitQuaternion<f64>],
+) -> crate::align::pose_fit::PoseData<'a> {
+    use crate::align::pose_fit::{PoseData, PoseFitParams, PoseTrack};
+    let (ref_t, ref_p) = pair.reference;
+    let (est_t, est_p) = pair.estimate;
+    PoseData {
+        ref_t,
+        ref_p,
+        estimate: PoseTrack {
+            t: est_t,
+            p: est_p,
+            q: orientations,
+        },
+        params: PoseFitParams {
+            max_gap_s: params.max_gap_s.unwrap_or(params.curvature.dt_max_s),
+            window_s: None,
+        },
+    }
+}
+
+/// The speed search's signals as the pose fit's views, the estimate's moved by the lateral lever the
+/// speed search found (if any).
+fn speed_views(
+    ((r, e), lever): &(crate::align::time_offset::SignalPair, Option<f64>),
+) -> (
+    crate::align::time_offset::SignalView<'_>,
+    crate::align::time_offset::SignalView<'_>,
+) {
+    use crate::align::time_offset::SignalView;
+    let e = match lever {
+        Some(d) => SignalView::with_lever(e, *d),
+        None => SignalView::of(e),
+    };
+    (SignalView::of(r), e)
+}
+
+/// The reason's note on the pose fit: its windows, its whole-mission Δt and lever, the windows left
+/// out as jumps, and when the lever and Δt are inseparable.
+fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
+    let (lever, _) = pc.lever;
     let mut note = format!(
         "refined by the pose fit ({} windows of {:.0} s: Δt {:+.4} ± {:.4} s, the estimate's sensor at ({:+.2}, {:+.2}, {:+.2}) m from the reference's point, fitted alongside)",
         pc.profile.windows.len(),
@@ -701,7 +732,12 @@ fn pose_over_time(
             "; at this mission's nearly constant speed a forward lever and Δt are inseparable: σ says how much",
         );
     }
-    let entry = OffsetMethodReport {
+    note
+}
+
+/// The pose fit's row of `methods`: its whole-mission Δt and its windows' median correlation.
+fn pose_entry(pc: &crate::align::pose_model::PoseClock) -> OffsetMethodReport {
+    OffsetMethodReport {
         method: OffsetMethod::Pose,
         offset_s: Some(pc.whole.0),
         correlation: crate::align::offset_profile::median(
@@ -716,13 +752,7 @@ fn pose_over_time(
         error: None,
         margin: None,
         defined_fraction: None,
-    };
-    let report = TimeOffsetReport {
-        fitted_lever_m: Some([lever.x, lever.y, lever.z]),
-        fitted_lever_sigma_m: lever_sigma.map(|s| [s.x, s.y, s.z]),
-        ..model_report(model, &pc.profile, t0_s)
-    };
-    Some((report, warnings, note, entry))
+    }
 }
 
 /// The warnings of a non-constant clock model chosen from the data (none when one was forced).
