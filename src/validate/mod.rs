@@ -152,55 +152,16 @@ pub fn evaluate_pair(reference: Trajectory, estimate: Trajectory) -> Result<Repo
 pub fn grade(truth: &dyn ClockTruth, report: &Report, t0_s: f64) -> MissionGrade {
     let e = &report.estimates[0];
     let o: &TimeOffsetReport = &e.time_offset;
-    let windows: Vec<WindowGrade> = o
-        .profile
-        .iter()
-        .filter(|w| w.sigma_s.is_finite())
-        .map(|w| WindowGrade {
-            error_s: w.offset_s - truth.offset_at(w.t - t0_s),
-            sigma_s: w.sigma_s,
-        })
-        .collect();
-    // The span of the overlap, from the profile (else the reference).
-    let (a, b) = match (o.profile.first(), o.profile.last(), o.profile_window_s) {
-        (Some(f), Some(l), Some(w)) => (f.t - t0_s - 0.5 * w, l.t - t0_s + 0.5 * w),
-        _ => (0.0, 0.0),
-    };
+    let windows = window_grades(truth, o, t0_s);
+    let (a, b) = overlap_s(o, t0_s);
     let ok = o.status == TimeOffsetStatus::Ok;
-    let headline_t = match o.model {
-        Some(OffsetModel::Linear) => o.t_mid.map_or(0.5 * (a + b), |t| t - t0_s),
-        Some(OffsetModel::Piecewise) => o
-            .segments
-            .iter()
-            .max_by(|x, y| (x.t_end - x.t_start).total_cmp(&(y.t_end - y.t_start)))
-            .map_or(0.5 * (a + b), |s| 0.5 * (s.t_start + s.t_end) - t0_s),
-        _ => 0.5 * (a + b),
-    };
+    let headline_t = headline_t_s(o, t0_s, (a, b));
     let error_s = ok.then(|| o.offset_s - truth.offset_at(headline_t));
     let spread_s = [a, b]
         .iter()
         .map(|&t| (truth.offset_at(t) - truth.offset_at(headline_t)).abs())
         .fold(0.0, f64::max);
-    let (step_time_error_s, step_segment_error_s) = match truth.step() {
-        Some((at, before, after))
-            if o.model == Some(OffsetModel::Piecewise) && o.segments.len() >= 2 =>
-        {
-            let change = o.segments[1..]
-                .iter()
-                .map(|s| s.t_start - t0_s - at)
-                .min_by(|x, y| x.abs().total_cmp(&y.abs()));
-            let seg = o
-                .segments
-                .iter()
-                .map(|s| {
-                    let mid = 0.5 * (s.t_start + s.t_end) - t0_s;
-                    (s.offset_s - if mid < at { before } else { after }).abs()
-                })
-                .fold(0.0, f64::max);
-            (change, Some(seg))
-        }
-        _ => (None, None),
-    };
+    let (step_time_error_s, step_segment_error_s) = step_errors_s(truth, o, t0_s);
     let codes: Vec<WarningCode> = report.warnings.iter().map(|w| w.code).collect();
     MissionGrade {
         kind: String::new(),
@@ -230,6 +191,71 @@ pub fn grade(truth: &dyn ClockTruth, report: &Report, t0_s: f64) -> MissionGrade
         step_time_error_s,
         step_segment_error_s,
         warnings: codes,
+    }
+}
+
+/// Each profile window with a finite σ against the truth at its time.
+fn window_grades(truth: &dyn ClockTruth, o: &TimeOffsetReport, t0_s: f64) -> Vec<WindowGrade> {
+    o.profile
+        .iter()
+        .filter(|w| w.sigma_s.is_finite())
+        .map(|w| WindowGrade {
+            error_s: w.offset_s - truth.offset_at(w.t - t0_s),
+            sigma_s: w.sigma_s,
+        })
+        .collect()
+}
+
+/// The span of the overlap, seconds from the truth's origin: from the first profile window's start
+/// to the last one's end (0, 0 without a profile).
+fn overlap_s(o: &TimeOffsetReport, t0_s: f64) -> (f64, f64) {
+    match (o.profile.first(), o.profile.last(), o.profile_window_s) {
+        (Some(f), Some(l), Some(w)) => (f.t - t0_s - 0.5 * w, l.t - t0_s + 0.5 * w),
+        _ => (0.0, 0.0),
+    }
+}
+
+/// The time the headline Δt states, seconds from the truth's origin: a linear model's `t_mid`, the
+/// middle of a piecewise model's longest segment, else the middle of the overlap `(a, b)`.
+fn headline_t_s(o: &TimeOffsetReport, t0_s: f64, (a, b): (f64, f64)) -> f64 {
+    match o.model {
+        Some(OffsetModel::Linear) => o.t_mid.map_or(0.5 * (a + b), |t| t - t0_s),
+        Some(OffsetModel::Piecewise) => o
+            .segments
+            .iter()
+            .max_by(|x, y| (x.t_end - x.t_start).total_cmp(&(y.t_end - y.t_start)))
+            .map_or(0.5 * (a + b), |s| 0.5 * (s.t_start + s.t_end) - t0_s),
+        _ => 0.5 * (a + b),
+    }
+}
+
+/// A step recovered by a piecewise model: the located change's error against the true step time
+/// (the change nearest to it) and the segments' largest offset error, seconds (none without a true
+/// step or a piecewise model of two segments or more).
+fn step_errors_s(
+    truth: &dyn ClockTruth,
+    o: &TimeOffsetReport,
+    t0_s: f64,
+) -> (Option<f64>, Option<f64>) {
+    match truth.step() {
+        Some((at, before, after))
+            if o.model == Some(OffsetModel::Piecewise) && o.segments.len() >= 2 =>
+        {
+            let change = o.segments[1..]
+                .iter()
+                .map(|s| s.t_start - t0_s - at)
+                .min_by(|x, y| x.abs().total_cmp(&y.abs()));
+            let seg = o
+                .segments
+                .iter()
+                .map(|s| {
+                    let mid = 0.5 * (s.t_start + s.t_end) - t0_s;
+                    (s.offset_s - if mid < at { before } else { after }).abs()
+                })
+                .fold(0.0, f64::max);
+            (change, Some(seg))
+        }
+        _ => (None, None),
     }
 }
 
