@@ -409,9 +409,22 @@ pub fn calibration(grades: &[&MissionGrade]) -> Calibration {
 /// The calibration table (Markdown) of `grades`: one row per kind, one for every constant-clock
 /// mission, then the drift and step recovery.
 pub fn table(grades: &[MissionGrade]) -> String {
-    use std::fmt::Write;
     let mut out = String::new();
-    let ms = |s: f64| format!("{:.1}", s * 1e3);
+    calibration_rows(&mut out, grades);
+    drift_rows(&mut out, grades);
+    step_rows(&mut out, grades);
+    out
+}
+
+/// Seconds as milliseconds, one decimal.
+fn ms(t_s: f64) -> String {
+    format!("{:.1}", t_s * 1e3)
+}
+
+/// The calibration table's header and rows: one per kind (in the grades' order), then every
+/// constant-clock mission (when the kinds mix clocks) and the legged ones among them.
+fn calibration_rows(out: &mut String, grades: &[MissionGrade]) {
+    use std::fmt::Write;
     let _ = writeln!(
         out,
         "| kind | missions | applied | |error| p50 / p90 / max ms | 2σ covers | median |error|/σ | σ > 50 ms at |error| < 10 ms: missions / windows | windows: 2σ covers | median |error|/σ | clock alarms |"
@@ -423,29 +436,9 @@ pub fn table(grades: &[MissionGrade]) -> String {
             kinds.push(&g.kind);
         }
     }
-    let row = |out: &mut String, name: &str, set: &[&MissionGrade]| {
-        let c = calibration(set);
-        let _ = writeln!(
-            out,
-            "| {name} | {} | {} | {} / {} / {} | {:.0} % | {:.2} | {} / {} | {:.0} % of {} | {:.2} | {} |",
-            c.missions,
-            c.applied,
-            ms(c.error_p50_s),
-            ms(c.error_p90_s),
-            ms(c.error_max_s),
-            c.coverage_2sigma * 100.0,
-            c.median_error_over_sigma,
-            c.sigma_too_large,
-            c.window_sigma_too_large,
-            c.window_coverage_2sigma * 100.0,
-            c.windows,
-            c.window_median_error_over_sigma,
-            c.clock_alarms
-        );
-    };
     for k in &kinds {
         let set: Vec<&MissionGrade> = grades.iter().filter(|g| g.kind == *k).collect();
-        row(&mut out, k, &set);
+        calibration_row(out, k, &set);
     }
     let constant: Vec<&MissionGrade> = grades
         .iter()
@@ -456,60 +449,94 @@ pub fn table(grades: &[MissionGrade]) -> String {
         })
         .collect();
     if constant.len() < grades.len() && !constant.is_empty() {
-        row(&mut out, "**all constant clocks**", &constant);
+        calibration_row(out, "**all constant clocks**", &constant);
     }
     let legged: Vec<&MissionGrade> = constant.iter().copied().filter(|g| g.legged).collect();
     if !legged.is_empty() {
-        row(&mut out, "**legged, constant clocks**", &legged);
+        calibration_row(out, "**legged, constant clocks**", &legged);
     }
+}
+
+/// One row of the calibration table: the [`calibration`] of `set`, named `name`.
+fn calibration_row(out: &mut String, name: &str, set: &[&MissionGrade]) {
+    use std::fmt::Write;
+    let c = calibration(set);
+    let _ = writeln!(
+        out,
+        "| {name} | {} | {} | {} / {} / {} | {:.0} % | {:.2} | {} / {} | {:.0} % of {} | {:.2} | {} |",
+        c.missions,
+        c.applied,
+        ms(c.error_p50_s),
+        ms(c.error_p90_s),
+        ms(c.error_max_s),
+        c.coverage_2sigma * 100.0,
+        c.median_error_over_sigma,
+        c.sigma_too_large,
+        c.window_sigma_too_large,
+        c.window_coverage_2sigma * 100.0,
+        c.windows,
+        c.window_median_error_over_sigma,
+        c.clock_alarms
+    );
+}
+
+/// The drift recovery table: one row per mission whose clock drifts (nothing when none does).
+fn drift_rows(out: &mut String, grades: &[MissionGrade]) {
+    use std::fmt::Write;
     let drifting: Vec<&MissionGrade> = grades.iter().filter(|g| g.drift_true_ppm != 0.0).collect();
-    if !drifting.is_empty() {
-        let _ = writeln!(out);
+    if drifting.is_empty() {
+        return;
+    }
+    let _ = writeln!(out);
+    let _ = writeln!(
+        out,
+        "| drift: kind, seed | platform | true ppm | model | drift ppm (error) | resolution ppm | σ ms | truth's spread about Δt ms |"
+    );
+    let _ = writeln!(out, "|---|---|---|---|---|---|---|---|");
+    for g in drifting {
         let _ = writeln!(
             out,
-            "| drift: kind, seed | platform | true ppm | model | drift ppm (error) | resolution ppm | σ ms | truth's spread about Δt ms |"
+            "| {} {} | {} | {:+.0} | {} | {} | {} | {} | {:.1} |",
+            g.kind,
+            g.seed,
+            if g.legged { "legged" } else { "ground" },
+            g.drift_true_ppm,
+            g.model.map_or("-", |m| m.as_str()),
+            g.drift_ppm.map_or("-".into(), |d| format!(
+                "{d:+.1} ({:+.1})",
+                d - g.drift_true_ppm
+            )),
+            g.drift_resolution_ppm
+                .map_or("-".into(), |r| format!("{r:.1}")),
+            g.sigma_s.map_or("-".into(), ms),
+            g.spread_s * 1e3
         );
-        let _ = writeln!(out, "|---|---|---|---|---|---|---|---|");
-        for g in drifting {
-            let _ = writeln!(
-                out,
-                "| {} {} | {} | {:+.0} | {} | {} | {} | {} | {:.1} |",
-                g.kind,
-                g.seed,
-                if g.legged { "legged" } else { "ground" },
-                g.drift_true_ppm,
-                g.model.map_or("-", |m| m.as_str()),
-                g.drift_ppm.map_or("-".into(), |d| format!(
-                    "{d:+.1} ({:+.1})",
-                    d - g.drift_true_ppm
-                )),
-                g.drift_resolution_ppm
-                    .map_or("-".into(), |r| format!("{r:.1}")),
-                g.sigma_s.map_or("-".into(), ms),
-                g.spread_s * 1e3
-            );
-        }
     }
+}
+
+/// The step recovery table: one row per step mission (nothing when there is none).
+fn step_rows(out: &mut String, grades: &[MissionGrade]) {
+    use std::fmt::Write;
     let steps: Vec<&MissionGrade> = grades.iter().filter(|g| g.kind == "step").collect();
-    if !steps.is_empty() {
-        let _ = writeln!(out);
+    if steps.is_empty() {
+        return;
+    }
+    let _ = writeln!(out);
+    let _ = writeln!(
+        out,
+        "| step: seed | platform | model | change located (s off) | worst segment error ms |"
+    );
+    let _ = writeln!(out, "|---|---|---|---|---|");
+    for g in steps {
         let _ = writeln!(
             out,
-            "| step: seed | platform | model | change located (s off) | worst segment error ms |"
+            "| {} | {} | {} | {} | {} |",
+            g.seed,
+            if g.legged { "legged" } else { "ground" },
+            g.model.map_or("-", |m| m.as_str()),
+            g.step_time_error_s
+                .map_or("-".into(), |e| format!("{e:+.1}")),
+            g.step_segment_error_s.map_or("-".into(), ms)
         );
-        let _ = writeln!(out, "|---|---|---|---|---|");
-        for g in steps {
-            let _ = writeln!(
-                out,
-                "| {} | {} | {} | {} | {} |",
-                g.seed,
-                if g.legged { "legged" } else { "ground" },
-                g.model.map_or("-", |m| m.as_str()),
-                g.step_time_error_s
-                    .map_or("-".into(), |e| format!("{e:+.1}")),
-                g.step_segment_error_s.map_or("-".into(), ms)
-            );
-        }
     }
-    out
 }
