@@ -469,7 +469,7 @@ fn draw_rates_hz(rng: &mut ChaCha8Rng, legged: bool) -> (f64, f64) {
 fn draw_est_lever_m(rng: &mut ChaCha8Rng, legged: bool) -> [f64; 3] {
     if legged {
         if rng.random::<f64>() < 0.35 {
-            // The mounting of the false step: 0.2 m ahead, 0.3 m above.
+            // A mounting once reported with a false clock step: 0.2 m ahead, 0.3 m above.
             [0.2, 0.0, 0.3]
         } else {
             [
