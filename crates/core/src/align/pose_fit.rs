@@ -259,6 +259,13 @@ struct Pt {
     t: f64,
 }
 
+impl Terms {
+    /// The window's residual RMS, metres.
+    fn rms_m(&self) -> f64 {
+        (self.rss / self.n as f64).sqrt()
+    }
+}
+
 impl Problem<'_> {
     /// The reduced normal equations of window `w` for the clock `shape`/`theta` (its parameters
     /// first) and, when `with_lever`, the lever D (the last three); `d` is the lever used either way.
@@ -274,6 +281,38 @@ impl Problem<'_> {
     ) -> Option<Terms> {
         let m = shape.len();
         let p = m + if with_lever { 3 } else { 0 };
+        let pts = self.points(w, shape, theta, d);
+        let n = pts.len();
+        if n < MIN_WINDOW_SAMPLES {
+            return None;
+        }
+        let win = WindowPoints::new(pts);
+        let nuisance = win.nuisance(s_bar);
+        let mut sums = NormalSums::zeros(p);
+        let mut shared = SharedColumns::new(m, with_lever);
+        for (q, dw) in win.pts.iter().zip(&nuisance.drift) {
+            let (e, cols) = nuisance.residual(&win, q, dw);
+            shared.fill(q, &nuisance, shape);
+            sums.add(&e, &cols, &shared.v, &shared.x);
+        }
+        let rss = sums.rss;
+        let (h, j, g) = sums.reduce(&nuisance, win.nf, s_bar)?;
+        Some(Terms {
+            n,
+            rss,
+            h,
+            j,
+            g,
+            tr: nuisance.tr,
+            s_uu: nuisance.s_uu,
+            s_rr: win.s_rr,
+        })
+    }
+
+    /// The points of window `w` (see [`Pt`]) for the clock `shape`/`theta` and the lever `d`: the
+    /// reference samples whose time on the estimate's clock, and the stencils of the central
+    /// differences around it, fall where the estimate's poses can be interpolated.
+    fn points(&self, w: &Window, shape: &ClockShape, theta: &[f64], d: &Vector3<f64>) -> Vec<Pt> {
         let mut pts: Vec<Pt> = Vec::with_capacity(w.range.len());
         let mut hints = [0usize; 5];
         let (h, hw) = (self.h, self.hw);
@@ -302,162 +341,307 @@ impl Problem<'_> {
                 t,
             });
         }
-        let n = pts.len();
-        if n < MIN_WINDOW_SAMPLES {
-            return None;
+        pts
+    }
+}
+
+/// A window's points and their centroids: what its similarity and drift are fitted to.
+struct WindowPoints {
+    pts: Vec<Pt>,
+    /// The number of points (the priors' weights grow with it).
+    nf: f64,
+    /// The centroids of the reference positions (r̄) and of u (ū), metres, and of the times (t̄),
+    /// seconds.
+    rbar_m: Vector3<f64>,
+    ubar_m: Vector3<f64>,
+    tbar_s: f64,
+    /// Σ|p_ref − p̄_ref|²: what the window's motion explains (see [`Terms`]).
+    s_rr: f64,
+}
+
+impl WindowPoints {
+    /// The centroids of `pts`.
+    fn new(pts: Vec<Pt>) -> WindowPoints {
+        let nf = pts.len() as f64;
+        let rbar_m = pts.iter().map(|q| q.r).sum::<Vector3<f64>>() / nf;
+        let ubar_m = pts.iter().map(|q| q.u).sum::<Vector3<f64>>() / nf;
+        let tbar_s = pts.iter().map(|q| q.t).sum::<f64>() / nf;
+        let s_rr: f64 = pts.iter().map(|q| (q.r - rbar_m).norm_squared()).sum();
+        WindowPoints {
+            pts,
+            nf,
+            rbar_m,
+            ubar_m,
+            tbar_s,
+            s_rr,
         }
-        let nf = n as f64;
-        let rbar = pts.iter().map(|q| q.r).sum::<Vector3<f64>>() / nf;
-        let ubar = pts.iter().map(|q| q.u).sum::<Vector3<f64>>() / nf;
-        let tbar = pts.iter().map(|q| q.t).sum::<f64>() / nf;
-        let s_rr: f64 = pts.iter().map(|q| (q.r - rbar).norm_squared()).sum();
-        // The similarity (rotation, Σ r̃·R·ũ, Σ|ũ|²) of centred points ũ_i = `at(i)`.
-        let similarity = |at: &dyn Fn(usize) -> Vector3<f64>| {
-            let mut cov = Matrix3::zeros();
-            let mut s_uu = 0.0;
-            for (i, q) in pts.iter().enumerate() {
-                let du = at(i);
-                cov += (q.r - rbar) * du.transpose();
-                s_uu += du.norm_squared();
-            }
-            let rot = rotation_of(&cov);
-            ((rot), (rot.transpose() * cov).trace(), s_uu)
-        };
-        let lambda = nf * SCALE_PRIOR_M * SCALE_PRIOR_M;
-        let scale_of = |tr: f64, s_uu: f64| ((tr + lambda * s_bar) / (s_uu + lambda)).max(1e-3);
-        let (mut rot, mut tr, mut s_uu) = similarity(&|i| pts[i].u - ubar);
-        // The estimate's heading drifting within the window at a rate b about its vertical: its
-        // positions carry b·∫(τ − t̄)·ẑ × dê (integrated over the window's own increments), which
-        // no rotation of the whole window removes.
-        let up = rot.transpose() * Vector3::z();
-        let mut drift = Vec::with_capacity(n);
+    }
+
+    /// The similarity of the centred points ũ_i = `at(i)` to the centred reference positions r̃:
+    /// the rotation R maximising Σ r̃·R·ũ (Umeyama), that Σ r̃·R·ũ and Σ|ũ|² (the scale's evidence).
+    fn similarity(&self, at: &dyn Fn(usize) -> Vector3<f64>) -> (Matrix3<f64>, f64, f64) {
+        let mut cov = Matrix3::zeros();
+        let mut s_uu = 0.0;
+        for (i, q) in self.pts.iter().enumerate() {
+            let du = at(i);
+            cov += (q.r - self.rbar_m) * du.transpose();
+            s_uu += du.norm_squared();
+        }
+        let rot = rotation_of(&cov);
+        (rot, (rot.transpose() * cov).trace(), s_uu)
+    }
+
+    /// The basis w_i of a heading drift about `up` (centred): a heading drifting at b rad/s moves
+    /// the points by b·w_i, w_i = ∫(τ − t̄)·up × dê over the window's own increments.
+    fn drift_basis(&self, up: &Vector3<f64>) -> Vec<Vector3<f64>> {
+        let pts = &self.pts;
+        let mut drift = Vec::with_capacity(pts.len());
         let mut acc = Vector3::zeros();
         drift.push(acc);
-        for k in 1..n {
-            let mid = 0.5 * (pts[k - 1].t + pts[k].t) - tbar;
+        for k in 1..pts.len() {
+            let mid = 0.5 * (pts[k - 1].t + pts[k].t) - self.tbar_s;
             acc += up.cross(&(pts[k].e - pts[k - 1].e)) * mid;
             drift.push(acc);
         }
-        let dbar = drift.iter().sum::<Vector3<f64>>() / nf;
+        let dbar = drift.iter().sum::<Vector3<f64>>() / self.nf;
         for w in &mut drift {
             *w -= dbar;
         }
+        drift
+    }
+
+    /// The window's nuisance (see [`Nuisance`]): the similarity of the centred points, then twice
+    /// the drift rate given the similarity and the similarity given the rate (when the window's
+    /// increments give the drift a basis). The scale is held to the mission's `s_bar` by its prior.
+    fn nuisance(&self, s_bar: f64) -> Nuisance {
+        let nf = self.nf;
+        let lambda = nf * SCALE_PRIOR_M * SCALE_PRIOR_M;
+        let scale_of = |tr: f64, s_uu: f64| ((tr + lambda * s_bar) / (s_uu + lambda)).max(1e-3);
+        let (mut rot, mut tr, mut s_uu) = self.similarity(&|i| self.pts[i].u - self.ubar_m);
+        // The estimate's heading drifting within the window at a rate b about its vertical: its
+        // positions carry b·∫(τ − t̄)·ẑ × dê (integrated over the window's own increments), which
+        // no rotation of the whole window removes.
+        let drift = self.drift_basis(&(rot.transpose() * Vector3::z()));
         let d_ww: f64 = drift.iter().map(|w| w.norm_squared()).sum();
         let mut b = 0.0;
         let mut s = scale_of(tr, s_uu);
         if d_ww > 0.0 {
             for _ in 0..2 {
                 // b given the similarity, then the similarity given b.
-                let num: f64 = pts
+                let num: f64 = self
+                    .pts
                     .iter()
                     .zip(&drift)
-                    .map(|(q, w)| (rot * w).dot(&(s * (rot * (q.u - ubar)) - (q.r - rbar))))
+                    .map(|(q, w)| {
+                        (rot * w).dot(&(s * (rot * (q.u - self.ubar_m)) - (q.r - self.rbar_m)))
+                    })
                     .sum();
                 b = num / (s * (d_ww + nf * DRIFT_PRIOR_M2S2 / (s * s)));
-                (rot, tr, s_uu) = similarity(&|i| pts[i].u - ubar - drift[i] * b);
+                (rot, tr, s_uu) = self.similarity(&|i| self.pts[i].u - self.ubar_m - drift[i] * b);
                 s = scale_of(tr, s_uu);
             }
         }
-        // Nuisance: translation (3), rotation (3, δω applied on the left), scale (1), heading drift
-        // rate (1).
-        let mut ntn = SMatrix::<f64, 8, 8>::zeros();
-        let mut ntv = DMatrix::<f64>::zeros(8, p);
-        let mut nte = SMatrix::<f64, 8, 1>::zeros();
-        let mut ntx = DMatrix::<f64>::zeros(8, p);
-        let mut vtv = DMatrix::<f64>::zeros(p, p);
-        let mut vtx = DMatrix::<f64>::zeros(p, p);
-        let mut vte = DVector::<f64>::zeros(p);
-        let mut rss = 0.0;
-        let mut phi = vec![0.0; m];
-        let mut v = vec![Vector3::zeros(); p];
-        let mut x = vec![Vector3::zeros(); p];
-        for (q, dw) in pts.iter().zip(&drift) {
-            let wv = s * (rot * (q.u - ubar - dw * b));
-            let e = wv + rbar - q.r;
-            rss += e.norm_squared();
-            // Columns of ∂model/∂nuisance.
-            let cols: [Vector3<f64>; 8] = [
-                Vector3::x(),
-                Vector3::y(),
-                Vector3::z(),
-                Vector3::x().cross(&wv),
-                Vector3::y().cross(&wv),
-                Vector3::z().cross(&wv),
-                wv / s,
-                -(rot * dw) * s,
-            ];
-            shape.basis(q.t, &mut phi);
-            let sdu = s * (rot * q.du);
-            let sdw = s * (rot * q.dw);
-            for (k, f) in phi.iter().enumerate() {
-                v[k] = sdu * *f;
-                x[k] = sdw * *f;
-            }
-            if with_lever {
-                let sr = s * (rot * q.rhat);
-                for c in 0..3 {
-                    v[m + c] = -sr.column(c).into_owned();
-                    x[m + c] = v[m + c];
-                }
-            }
-            for a in 0..8 {
-                nte[a] += cols[a].dot(&e);
-                for b in a..8 {
-                    ntn[(a, b)] += cols[a].dot(&cols[b]);
-                }
-                for b in 0..p {
-                    ntv[(a, b)] += cols[a].dot(&v[b]);
-                    ntx[(a, b)] += cols[a].dot(&x[b]);
-                }
-            }
-            for (a, va) in v.iter().enumerate() {
-                vte[a] += va.dot(&e);
-                for b in 0..p {
-                    if b >= a {
-                        vtv[(a, b)] += va.dot(&v[b]);
-                    }
-                    vtx[(a, b)] += va.dot(&x[b]);
-                }
+        Nuisance {
+            rot,
+            scale: s,
+            rate_rad_s: b,
+            drift,
+            tr,
+            s_uu,
+            lambda_m2: lambda,
+        }
+    }
+}
+
+/// A window's nuisance, fitted to its points: its similarity (rotation, scale; the translation is
+/// the centroids') and its heading drift rate b, p_ref − r̄ ≈ s·R·(u − ū − b·w).
+struct Nuisance {
+    rot: Matrix3<f64>,
+    scale: f64,
+    /// b, rad/s.
+    rate_rad_s: f64,
+    /// The drift's basis w_i, one per point ([`WindowPoints::drift_basis`]).
+    drift: Vec<Vector3<f64>>,
+    /// Σ r̃·R·ũ and Σ|ũ|² of the last similarity (the window's scale evidence, see [`Terms`]).
+    tr: f64,
+    s_uu: f64,
+    /// The scale prior's weight λ = n·[`SCALE_PRIOR_M`]², m².
+    lambda_m2: f64,
+}
+
+impl Nuisance {
+    /// Point `q`'s residual e (the model less the reference, metres) and the model's derivatives by
+    /// the nuisance: translation (3), rotation (3, δω applied on the left), scale (1), heading drift
+    /// rate (1). `dw`: the point's drift basis.
+    fn residual(
+        &self,
+        win: &WindowPoints,
+        q: &Pt,
+        dw: &Vector3<f64>,
+    ) -> (Vector3<f64>, [Vector3<f64>; 8]) {
+        let (rot, s, b) = (self.rot, self.scale, self.rate_rad_s);
+        let wv = s * (rot * (q.u - win.ubar_m - dw * b));
+        let e = wv + win.rbar_m - q.r;
+        let cols: [Vector3<f64>; 8] = [
+            Vector3::x(),
+            Vector3::y(),
+            Vector3::z(),
+            Vector3::x().cross(&wv),
+            Vector3::y().cross(&wv),
+            Vector3::z().cross(&wv),
+            wv / s,
+            -(rot * dw) * s,
+        ];
+        (e, cols)
+    }
+}
+
+/// One point's columns of the shared parameters (the clock's, then the lever's when fitted): `v`
+/// the instrument's (∂u/∂Δt over ±h), `x` the Jacobian's (over ±h_w); `phi` holds the clock's
+/// basis. Refilled point after point.
+struct SharedColumns {
+    phi: Vec<f64>,
+    v: Vec<Vector3<f64>>,
+    x: Vec<Vector3<f64>>,
+    with_lever: bool,
+}
+
+impl SharedColumns {
+    /// Room for `m` clock parameters and, when `with_lever`, the lever's three.
+    fn new(m: usize, with_lever: bool) -> SharedColumns {
+        let p = m + if with_lever { 3 } else { 0 };
+        SharedColumns {
+            phi: vec![0.0; m],
+            v: vec![Vector3::zeros(); p],
+            x: vec![Vector3::zeros(); p],
+            with_lever,
+        }
+    }
+
+    /// The columns of point `q` under the window's `nuisance`: the clock's basis φ(t) times s·R·∂u/∂Δt,
+    /// and −s·R·R̂ for the lever (u = ê − R̂·D).
+    fn fill(&mut self, q: &Pt, nuisance: &Nuisance, shape: &ClockShape) {
+        let (rot, s) = (nuisance.rot, nuisance.scale);
+        let m = self.phi.len();
+        shape.basis(q.t, &mut self.phi);
+        let sdu = s * (rot * q.du);
+        let sdw = s * (rot * q.dw);
+        for (k, f) in self.phi.iter().enumerate() {
+            self.v[k] = sdu * *f;
+            self.x[k] = sdw * *f;
+        }
+        if self.with_lever {
+            let sr = s * (rot * q.rhat);
+            for c in 0..3 {
+                self.v[m + c] = -sr.column(c).into_owned();
+                self.x[m + c] = self.v[m + c];
             }
         }
+    }
+}
+
+/// The sums of a window's normal equations over its points, the nuisance N (8 columns) against
+/// itself, the shared parameters' instrument V and Jacobian X and the residual e (NᵀN, NᵀV, NᵀX,
+/// Nᵀe), the instrument against the same (VᵀV, VᵀX, Vᵀe), and the residual sum of squares.
+struct NormalSums {
+    ntn: SMatrix<f64, 8, 8>,
+    ntv: DMatrix<f64>,
+    nte: SMatrix<f64, 8, 1>,
+    ntx: DMatrix<f64>,
+    vtv: DMatrix<f64>,
+    vtx: DMatrix<f64>,
+    vte: DVector<f64>,
+    rss: f64,
+}
+
+impl NormalSums {
+    /// Empty sums for `p` shared parameters.
+    fn zeros(p: usize) -> NormalSums {
+        NormalSums {
+            ntn: SMatrix::<f64, 8, 8>::zeros(),
+            ntv: DMatrix::<f64>::zeros(8, p),
+            nte: SMatrix::<f64, 8, 1>::zeros(),
+            ntx: DMatrix::<f64>::zeros(8, p),
+            vtv: DMatrix::<f64>::zeros(p, p),
+            vtx: DMatrix::<f64>::zeros(p, p),
+            vte: DVector::<f64>::zeros(p),
+            rss: 0.0,
+        }
+    }
+
+    /// Adds one point: its residual `e`, nuisance columns `cols` and shared columns `v` and `x`
+    /// (of the symmetric NᵀN and VᵀV the upper triangles only).
+    fn add(
+        &mut self,
+        e: &Vector3<f64>,
+        cols: &[Vector3<f64>; 8],
+        v: &[Vector3<f64>],
+        x: &[Vector3<f64>],
+    ) {
+        let p = v.len();
+        self.rss += e.norm_squared();
+        for a in 0..8 {
+            self.nte[a] += cols[a].dot(e);
+            for b in a..8 {
+                self.ntn[(a, b)] += cols[a].dot(&cols[b]);
+            }
+            for b in 0..p {
+                self.ntv[(a, b)] += cols[a].dot(&v[b]);
+                self.ntx[(a, b)] += cols[a].dot(&x[b]);
+            }
+        }
+        for (a, va) in v.iter().enumerate() {
+            self.vte[a] += va.dot(e);
+            for b in 0..p {
+                if b >= a {
+                    self.vtv[(a, b)] += va.dot(&v[b]);
+                }
+                self.vtx[(a, b)] += va.dot(&x[b]);
+            }
+        }
+    }
+
+    /// The reduced equations (H, J and g of [`Terms`]): the symmetric sums completed, the priors of
+    /// the window's `nuisance` (its scale about the mission's `s_bar`, its drift rate about 0; `nf`
+    /// points) and a ridge added, then the nuisance eliminated (the Schur complement). `None` when
+    /// the nuisance's block cannot be inverted.
+    fn reduce(
+        mut self,
+        nuisance: &Nuisance,
+        nf: f64,
+        s_bar: f64,
+    ) -> Option<(DMatrix<f64>, DMatrix<f64>, DVector<f64>)> {
+        let p = self.vtv.nrows();
         for a in 0..8 {
             for b in 0..a {
-                ntn[(a, b)] = ntn[(b, a)];
+                self.ntn[(a, b)] = self.ntn[(b, a)];
             }
         }
         for a in 0..p {
             for b in 0..a {
-                vtv[(a, b)] = vtv[(b, a)];
+                self.vtv[(a, b)] = self.vtv[(b, a)];
             }
         }
         // The priors: residuals √λ·(s − s̄) and √λ_b·b.
-        ntn[(6, 6)] += lambda;
-        nte[6] += lambda * (s - s_bar);
-        ntn[(7, 7)] += nf * DRIFT_PRIOR_M2S2;
-        nte[7] += nf * DRIFT_PRIOR_M2S2 * b;
+        let lambda = nuisance.lambda_m2;
+        self.ntn[(6, 6)] += lambda;
+        self.nte[6] += lambda * (nuisance.scale - s_bar);
+        self.ntn[(7, 7)] += nf * DRIFT_PRIOR_M2S2;
+        self.nte[7] += nf * DRIFT_PRIOR_M2S2 * nuisance.rate_rad_s;
         // A rotation or a drift the window does not determine (its points on a line, standing)
         // stays put.
-        let ridge = 1e-9 * (0..8).map(|a| ntn[(a, a)]).fold(0.0, f64::max);
+        let ridge = 1e-9 * (0..8).map(|a| self.ntn[(a, a)]).fold(0.0, f64::max);
         for a in 0..8 {
-            ntn[(a, a)] += ridge;
+            self.ntn[(a, a)] += ridge;
         }
-        let inv = ntn.try_inverse()?;
+        let inv = self.ntn.try_inverse()?;
         let ntn_inv = DMatrix::from_fn(8, 8, |a, b| inv[(a, b)]);
-        let xv = &ntn_inv * &ntv;
-        let h = &vtv - ntv.transpose() * &xv;
-        let j = &vtx - xv.transpose() * &ntx;
-        let nte_d = DVector::from_fn(8, |a, _| nte[a]);
-        let g = &vte - xv.transpose() * nte_d;
-        Some(Terms {
-            n,
-            rss,
-            h,
-            j,
-            g,
-            tr,
-            s_uu,
-            s_rr,
-        })
+        let xv = &ntn_inv * &self.ntv;
+        let h = &self.vtv - self.ntv.transpose() * &xv;
+        let j = &self.vtx - xv.transpose() * &self.ntx;
+        let nte_d = DVector::from_fn(8, |a, _| self.nte[a]);
+        let g = &self.vte - xv.transpose() * nte_d;
+        Some((h, j, g))
     }
 }
 
@@ -634,7 +818,7 @@ pub fn fit(
         .map(|w| {
             problem
                 .terms(w, &shape, &theta0, &lever0, false, 1.0)
-                .map(|t| (t.rss / t.n as f64).sqrt())
+                .map(|t| t.rms_m())
         })
         .collect();
     let mut rms: Vec<f64> = at_start.iter().flatten().copied().collect();
@@ -688,31 +872,208 @@ fn solve(
     with_lever: bool,
 ) -> Option<PoseFit> {
     let m = shape.len();
-    let p = m + if with_lever { 3 } else { 0 };
-    let eval = |theta: &[f64], d: &Vector3<f64>, s_bar: f64| -> Vec<Option<Terms>> {
-        windows
-            .par_iter()
-            .map(|w| problem.terms(w, shape, theta, d, with_lever, s_bar))
-            .collect()
+    let fit = SharedFit {
+        problem,
+        windows,
+        shape,
+        with_lever,
+        m,
+        p: m + if with_lever { 3 } else { 0 },
     };
-    let (mut theta, mut d) = (theta0, lever0);
-    let mut s_bar = 1.0;
-    let mut terms = eval(&theta, &d, s_bar);
-    if terms.iter().flatten().count() < 3 {
-        return None;
+    let mut x = fit.start(theta0, lever0)?;
+    let iterations = fit.gauss_newton(&mut x)?;
+    fit.finish(x, iterations)
+}
+
+/// The fit of the parameters every window shares over `windows`: the clock `shape`'s `m` (first)
+/// and, when `with_lever`, the lever's three (of `p` in all).
+struct SharedFit<'a> {
+    problem: &'a Problem<'a>,
+    windows: &'a [Window],
+    shape: &'a ClockShape,
+    with_lever: bool,
+    m: usize,
+    p: usize,
+}
+
+/// Gauss–Newton's iterate: the shared parameters, the windows' reduced equations at them, and what
+/// steers the steps.
+struct Iterate {
+    /// The clock's parameters θ (seconds; a linear slope in s/s).
+    theta: Vec<f64>,
+    /// The lever D, estimate body frame.
+    lever_m: Vector3<f64>,
+    /// Each window's reduced equations at θ, D and the mission's scale (`None`: too few points).
+    terms: Vec<Option<Terms>>,
+    /// The mission's scale s̄, the centre of the windows' scale priors.
+    scale: f64,
+    /// The secant correction c of the Jacobian's clock columns.
+    jacobian_scale: f64,
+    /// The Levenberg–Marquardt damping λ.
+    damping: f64,
+}
+
+impl SharedFit<'_> {
+    /// The windows' reduced equations at the clock `theta`, the lever `d` and the mission's scale
+    /// `s_bar`.
+    fn eval(&self, theta: &[f64], d: &Vector3<f64>, s_bar: f64) -> Vec<Option<Terms>> {
+        self.windows
+            .par_iter()
+            .map(|w| {
+                self.problem
+                    .terms(w, self.shape, theta, d, self.with_lever, s_bar)
+            })
+            .collect()
     }
-    let mut converged = false;
-    let mut iterations = 0;
-    let lever_weight = |terms: &[Option<Terms>]| {
-        let (rss, n) = terms
+
+    /// The iterate at the start (the mission's scale 1); `None` with fewer than three windows.
+    fn start(&self, theta0: Vec<f64>, lever0: Vector3<f64>) -> Option<Iterate> {
+        let s_bar = 1.0;
+        let terms = self.eval(&theta0, &lever0, s_bar);
+        if terms.iter().flatten().count() < 3 {
+            return None;
+        }
+        Some(Iterate {
+            theta: theta0,
+            lever_m: lever0,
+            terms,
+            scale: s_bar,
+            jacobian_scale: 1.0,
+            damping: 1e-3,
+        })
+    }
+
+    /// Gauss–Newton on the estimating equations from `x`, at most [`MAX_ITERATIONS`] steps, until a
+    /// step is small or no damping makes one acceptable: the number of iterations; `None` when the
+    /// summed equations cannot be solved.
+    fn gauss_newton(&self, x: &mut Iterate) -> Option<usize> {
+        let (m, p) = (self.m, self.p);
+        let mut iterations = 0;
+        let mut previous: Option<DVector<f64>> = None;
+        for it in 0..MAX_ITERATIONS {
+            iterations = it + 1;
+            if it < 3 {
+                self.rescale(x);
+            }
+            let l = lever_weight(&x.terms);
+            let (Some(mut step), g0, scales) =
+                self.normal(&x.terms, &x.lever_m, l, x.jacobian_scale, x.damping)
+            else {
+                return None;
+            };
+            // The secant correction, once the lever has settled.
+            if let (true, Some(last)) = (it >= 2, &previous) {
+                self.secant_correction(x, &mut step, last, l);
+            }
+            let before = merit(&g0, &scales);
+            let accepted = self.backtrack(x, &mut step, l, &scales, before);
+            let small = (0..m).all(|k| step[k].abs() < 2e-6)
+                && (!self.with_lever || (m..p).all(|k| step[k].abs() < 2e-5));
+            if !accepted || small {
+                break;
+            }
+            previous = Some(step);
+        }
+        Some(iterations)
+    }
+
+    /// The mission's scale from the windows' evidence (Σ tr over Σ s_uu), the windows' equations
+    /// then re-evaluated with it, so that every step compares like with like. Done in the first
+    /// iterations only.
+    fn rescale(&self, x: &mut Iterate) {
+        let (tr, suu) = x
+            .terms
             .iter()
             .flatten()
-            .fold((0.0, 0usize), |(r, n), t| (r + t.rss, n + t.n));
-        rss / (3.0 * n.max(1) as f64) / (LEVER_PRIOR_M * LEVER_PRIOR_M)
-    };
-    // The reduced equations summed over the windows, the lever's prior (weight `l`) added: the
-    // Newton step −J⁻¹·g, the gradient and the scales of the merit.
-    let normal = |terms: &[Option<Terms>], d: &Vector3<f64>, l: f64, c: f64, lambda: f64| {
+            .fold((0.0, 0.0), |(a, b), t| (a + t.tr, b + t.s_uu));
+        if suu > 0.0 && tr > 0.0 && (tr / suu - x.scale).abs() > 1e-6 {
+            x.scale = tr / suu;
+            x.terms = self.eval(&x.theta, &x.lever_m, x.scale);
+        }
+    }
+
+    /// The secant correction c of the Jacobian's clock columns, which are a derivative over a
+    /// wider stencil and miss part of the fast motion (a gait) the residual follows: a clock
+    /// `step` that undoes part of the `last` (ρ < 0, its projection on it) means the Jacobian was
+    /// too small, so c grows by 1 − ρ (within [1, 4]) and `step` is solved again with it.
+    fn secant_correction(
+        &self,
+        x: &mut Iterate,
+        step: &mut DVector<f64>,
+        last: &DVector<f64>,
+        l: f64,
+    ) {
+        let m = self.m;
+        let (new, old) = (step.rows(0, m), last.rows(0, m));
+        let norm = old.dot(&old);
+        let rho = new.dot(&old) / norm;
+        if norm.sqrt() > 1e-5 && rho < 0.0 {
+            x.jacobian_scale = (x.jacobian_scale * (1.0 - rho)).clamp(1.0, 4.0);
+            if let (Some(s), ..) = self.normal(&x.terms, &x.lever_m, l, x.jacobian_scale, x.damping)
+            {
+                *step = s;
+            }
+        }
+    }
+
+    /// Takes `step` (shortened to [`MAX_STEP_S`] on the clock) when it keeps every window and
+    /// lowers the merit of the estimating equations below `before` (the instrument is not the
+    /// cost's exact gradient, so the steps solve g = 0 rather than descend a cost); otherwise ten
+    /// times more damping and a new step, ten tries at most. Whether a step was taken (`step` is
+    /// then the one taken); the damping falls after a success.
+    fn backtrack(
+        &self,
+        x: &mut Iterate,
+        step: &mut DVector<f64>,
+        l: f64,
+        scales: &DVector<f64>,
+        before: f64,
+    ) -> bool {
+        let (m, c) = (self.m, x.jacobian_scale);
+        for _ in 0..10 {
+            let largest = (0..m).map(|k| step[k].abs()).fold(0.0, f64::max);
+            let a = if largest > MAX_STEP_S {
+                MAX_STEP_S / largest
+            } else {
+                1.0
+            };
+            let t2: Vec<f64> = (0..m).map(|k| x.theta[k] + a * step[k]).collect();
+            let d2 = if self.with_lever {
+                x.lever_m + Vector3::new(step[m], step[m + 1], step[m + 2]) * a
+            } else {
+                x.lever_m
+            };
+            let terms2 = self.eval(&t2, &d2, x.scale);
+            if terms2.iter().flatten().count() == x.terms.iter().flatten().count()
+                && merit(&self.normal(&terms2, &d2, l, c, 0.0).1, scales) < before
+            {
+                x.theta = t2;
+                x.lever_m = d2;
+                x.terms = terms2;
+                *step *= a;
+                x.damping = (x.damping / 3.0).max(1e-6);
+                return true;
+            }
+            x.damping *= 10.0;
+            match self.normal(&x.terms, &x.lever_m, l, c, x.damping) {
+                (Some(s), ..) => *step = s,
+                _ => return false,
+            }
+        }
+        false
+    }
+
+    /// The reduced equations summed over the windows with the lever's prior (weight `l`, centred
+    /// on 0, at the lever `d`) added, the Jacobian's clock columns scaled by the secant correction
+    /// `c`: (H, J, g).
+    fn summed(
+        &self,
+        terms: &[Option<Terms>],
+        d: &Vector3<f64>,
+        l: f64,
+        c: f64,
+    ) -> (DMatrix<f64>, DMatrix<f64>, DVector<f64>) {
+        let (m, p) = (self.m, self.p);
         let (mut h, mut j, mut g) = (
             DMatrix::<f64>::zeros(p, p),
             DMatrix::<f64>::zeros(p, p),
@@ -723,188 +1084,144 @@ fn solve(
             j += &t.j;
             g += &t.g;
         }
-        if with_lever {
+        if self.with_lever {
             for c in 0..3 {
                 h[(m + c, m + c)] += l;
                 j[(m + c, m + c)] += l;
                 g[m + c] += l * d[c];
             }
         }
-        for k in 0..m {
-            j.column_mut(k).scale_mut(c);
-        }
-        // Levenberg–Marquardt: λ·diag(H) added, more of it after a failed step.
-        for k in 0..p {
+        scale_clock_columns(&mut j, m, c);
+        (h, j, g)
+    }
+
+    /// The damped Newton step −(J + λ·diag(H))⁻¹·g of the summed equations (see [`Self::summed`];
+    /// Levenberg–Marquardt: more λ after a failed step), the gradient g and the merit's scales
+    /// diag(H).
+    fn normal(
+        &self,
+        terms: &[Option<Terms>],
+        d: &Vector3<f64>,
+        l: f64,
+        c: f64,
+        lambda: f64,
+    ) -> (Option<DVector<f64>>, DVector<f64>, DVector<f64>) {
+        let (h, mut j, g) = self.summed(terms, d, l, c);
+        for k in 0..self.p {
             j[(k, k)] += lambda * h[(k, k)];
         }
         let step = j.lu().solve(&g).map(|x| -x);
         (step, g, h.diagonal())
-    };
-    // The merit of the estimating equations: Σ g_k²/H_kk with the current iterate's scales (the
-    // Newton direction descends it).
-    let merit = |g: &DVector<f64>, scales: &DVector<f64>| {
-        g.iter()
-            .zip(scales.iter())
-            .map(|(g, h)| if *h > 0.0 { g * g / h } else { 0.0 })
-            .sum::<f64>()
-    };
-    // The Jacobian's clock columns are a derivative over a wider stencil, which misses part of the
-    // fast motion (a gait) the residual follows: scaled by `c`, a secant correction learnt from
-    // successive steps (a step undone by the next one means the Jacobian was too small).
-    let mut c = 1.0;
-    let mut lambda = 1e-3;
-    let mut previous: Option<DVector<f64>> = None;
-    for it in 0..MAX_ITERATIONS {
-        iterations = it + 1;
-        // The mission's scale from the windows' evidence, in the first iterations (the windows'
-        // equations then re-evaluated with it, so that every step compares like with like).
-        if it < 3 {
-            let (tr, suu) = terms
-                .iter()
-                .flatten()
-                .fold((0.0, 0.0), |(a, b), t| (a + t.tr, b + t.s_uu));
-            if suu > 0.0 && tr > 0.0 && (tr / suu - s_bar).abs() > 1e-6 {
-                s_bar = tr / suu;
-                terms = eval(&theta, &d, s_bar);
-            }
-        }
-        let l = lever_weight(&terms);
-        let (Some(mut step), g0, scales) = normal(&terms, &d, l, c, lambda) else {
+    }
+
+    /// The delete-one-window jackknife at the solution (see the module doc): each window left out
+    /// by one Newton step of the summed equations less its own; the covariance
+    /// (K−1)/K·Σ(δ₋ₖ − δ̄)(δ₋ₖ − δ̄)ᵀ of those steps, and the summed H (for the variance
+    /// inflation). `None` when fewer than three windows could be left out.
+    fn jackknife(
+        &self,
+        terms: &[Option<Terms>],
+        d: &Vector3<f64>,
+        l: f64,
+        c: f64,
+    ) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
+        let (m, p) = (self.m, self.p);
+        let (h, j, _) = self.summed(terms, d, l, c);
+        let deltas: Vec<DVector<f64>> = terms
+            .iter()
+            .flatten()
+            .filter_map(|t| {
+                let mut tj = t.j.clone();
+                scale_clock_columns(&mut tj, m, c);
+                (&j - tj).lu().solve(&t.g)
+            })
+            .collect();
+        if deltas.len() < 3 {
             return None;
+        }
+        let kf = deltas.len() as f64;
+        let mean = deltas.iter().fold(DVector::zeros(p), |a, d| a + d) / kf;
+        let mut cov = DMatrix::<f64>::zeros(p, p);
+        for dlt in &deltas {
+            let c = dlt - &mean;
+            cov += &c * c.transpose();
+        }
+        cov *= (kf - 1.0) / kf;
+        Some((cov, h))
+    }
+
+    /// The fit at the solution `x`: the jackknife's standard errors, whether it converged (the
+    /// Newton step left is small beside them), the variance inflation of Δt by the lever.
+    fn finish(&self, x: Iterate, iterations: usize) -> Option<PoseFit> {
+        let (m, p, with_lever) = (self.m, self.p, self.with_lever);
+        let (d, c) = (x.lever_m, x.jacobian_scale);
+        let l = lever_weight(&x.terms);
+        let remaining = self.normal(&x.terms, &d, l, c, 0.0).0;
+        let used: Vec<(&Window, &Terms)> = self
+            .windows
+            .iter()
+            .zip(&x.terms)
+            .filter_map(|(w, t)| t.as_ref().map(|t| (w, t)))
+            .collect();
+        let (cov, h) = self.jackknife(&x.terms, &d, l, c)?;
+        let sig = |i: usize| cov[(i, i)].max(0.0).sqrt();
+        // Converged: the Newton step left is small beside the parameters' own uncertainty (the
+        // estimating equations are as rough as their noise at that scale).
+        let converged = remaining.is_some_and(|step| {
+            (0..m).all(|k| step[k].abs() <= (0.5 * sig(k)).max(1e-4))
+                && (!with_lever || (m..p).all(|k| step[k].abs() <= (0.5 * sig(k)).max(1e-3)))
+        });
+        let variance_inflation = if with_lever {
+            // Var(θ₀) with D free over Var(θ₀) with D held, from the normal equations.
+            h.clone()
+                .try_inverse()
+                .map_or(f64::INFINITY, |inv| inv[(0, 0)] * h[(0, 0)])
+        } else {
+            1.0
         };
-        // The secant correction, once the lever has settled, from a step that undoes part of the
-        // last (the Jacobian was too small).
-        if let (true, Some(last)) = (it >= 2, &previous) {
-            let (new, old) = (step.rows(0, m), last.rows(0, m));
-            let norm = old.dot(&old);
-            let rho = new.dot(&old) / norm;
-            if norm.sqrt() > 1e-5 && rho < 0.0 {
-                c = (c * (1.0 - rho)).clamp(1.0, 4.0);
-                if let (Some(s), ..) = normal(&terms, &d, l, c, lambda) {
-                    step = s;
-                }
-            }
-        }
-        let before = merit(&g0, &scales);
-        // The instrument is not the cost's exact gradient, so the steps solve the estimating
-        // equations g = 0: a step is kept when it lowers their merit; otherwise more damping.
-        let mut accepted = false;
-        for _ in 0..10 {
-            let largest = (0..m).map(|k| step[k].abs()).fold(0.0, f64::max);
-            let a = if largest > MAX_STEP_S {
-                MAX_STEP_S / largest
-            } else {
-                1.0
-            };
-            let t2: Vec<f64> = (0..m).map(|k| theta[k] + a * step[k]).collect();
-            let d2 = if with_lever {
-                d + Vector3::new(step[m], step[m + 1], step[m + 2]) * a
-            } else {
-                d
-            };
-            let terms2 = eval(&t2, &d2, s_bar);
-            if terms2.iter().flatten().count() == terms.iter().flatten().count()
-                && merit(&normal(&terms2, &d2, l, c, 0.0).1, &scales) < before
-            {
-                theta = t2;
-                d = d2;
-                terms = terms2;
-                accepted = true;
-                step *= a;
-                lambda = (lambda / 3.0).max(1e-6);
-                break;
-            }
-            lambda *= 10.0;
-            match normal(&terms, &d, l, c, lambda) {
-                (Some(s), ..) => step = s,
-                _ => break,
-            }
-        }
-        let small = (0..m).all(|k| step[k].abs() < 2e-6)
-            && (!with_lever || (m..p).all(|k| step[k].abs() < 2e-5));
-        if !accepted || small {
-            break;
-        }
-        previous = Some(step);
+        Some(PoseFit {
+            shape: self.shape.clone(),
+            theta: x.theta,
+            lever_m: d,
+            theta_sigma: (0..m).map(sig).collect(),
+            lever_sigma_m: with_lever.then(|| Vector3::new(sig(m), sig(m + 1), sig(m + 2))),
+            covariance: cov,
+            variance_inflation,
+            windows: used.iter().map(|(w, _)| (*w).clone()).collect(),
+            outliers: Vec::new(),
+            rms_m: used.iter().map(|(_, t)| t.rms_m()).collect(),
+            scale: x.scale,
+            jacobian_scale: c,
+            iterations,
+            converged: converged && used.len() >= 3,
+        })
     }
-    let l = lever_weight(&terms);
-    let remaining = normal(&terms, &d, l, c, 0.0).0;
-    // The jackknife over windows: each left out by one Newton step of the reduced equations.
-    let used: Vec<(&Window, &Terms)> = windows
+}
+
+/// The lever prior's weight: the windows' residual variance per coordinate over the prior's
+/// variance [`LEVER_PRIOR_M`]².
+fn lever_weight(terms: &[Option<Terms>]) -> f64 {
+    let (rss, n) = terms
         .iter()
-        .zip(&terms)
-        .filter_map(|(w, t)| t.as_ref().map(|t| (w, t)))
-        .collect();
-    let k = used.len();
-    let (mut h, mut j) = (DMatrix::<f64>::zeros(p, p), DMatrix::<f64>::zeros(p, p));
-    for (_, t) in &used {
-        h += &t.h;
-        j += &t.j;
-    }
-    if with_lever {
-        for c in 0..3 {
-            h[(m + c, m + c)] += l;
-            j[(m + c, m + c)] += l;
-        }
-    }
+        .flatten()
+        .fold((0.0, 0usize), |(r, n), t| (r + t.rss, n + t.n));
+    rss / (3.0 * n.max(1) as f64) / (LEVER_PRIOR_M * LEVER_PRIOR_M)
+}
+
+/// The merit of the estimating equations: Σ g_k²/H_kk with the current iterate's `scales` (the
+/// Newton direction descends it).
+fn merit(g: &DVector<f64>, scales: &DVector<f64>) -> f64 {
+    g.iter()
+        .zip(scales.iter())
+        .map(|(g, h)| if *h > 0.0 { g * g / h } else { 0.0 })
+        .sum::<f64>()
+}
+
+/// The Jacobian's `m` clock columns of `j` scaled by the secant correction `c`.
+fn scale_clock_columns(j: &mut DMatrix<f64>, m: usize, c: f64) {
     for k in 0..m {
         j.column_mut(k).scale_mut(c);
     }
-    let deltas: Vec<DVector<f64>> = used
-        .iter()
-        .filter_map(|(_, t)| {
-            let mut tj = t.j.clone();
-            for k in 0..m {
-                tj.column_mut(k).scale_mut(c);
-            }
-            (&j - tj).lu().solve(&t.g)
-        })
-        .collect();
-    if deltas.len() < 3 {
-        return None;
-    }
-    let kf = deltas.len() as f64;
-    let mean = deltas.iter().fold(DVector::zeros(p), |a, d| a + d) / kf;
-    let mut cov = DMatrix::<f64>::zeros(p, p);
-    for dlt in &deltas {
-        let c = dlt - &mean;
-        cov += &c * c.transpose();
-    }
-    cov *= (kf - 1.0) / kf;
-    let sig = |i: usize| cov[(i, i)].max(0.0).sqrt();
-    // Converged: the Newton step left is small beside the parameters' own uncertainty (the
-    // estimating equations are as rough as their noise at that scale).
-    if let Some(step) = remaining {
-        converged = (0..m).all(|k| step[k].abs() <= (0.5 * sig(k)).max(1e-4))
-            && (!with_lever || (m..p).all(|k| step[k].abs() <= (0.5 * sig(k)).max(1e-3)));
-    }
-    let variance_inflation = if with_lever {
-        // Var(θ₀) with D free over Var(θ₀) with D held, from the normal equations.
-        h.clone()
-            .try_inverse()
-            .map_or(f64::INFINITY, |inv| inv[(0, 0)] * h[(0, 0)])
-    } else {
-        1.0
-    };
-    Some(PoseFit {
-        shape: shape.clone(),
-        theta,
-        lever_m: d,
-        theta_sigma: (0..m).map(sig).collect(),
-        lever_sigma_m: with_lever.then(|| Vector3::new(sig(m), sig(m + 1), sig(m + 2))),
-        covariance: cov,
-        variance_inflation,
-        windows: used.iter().map(|(w, _)| (*w).clone()).collect(),
-        outliers: Vec::new(),
-        rms_m: used
-            .iter()
-            .map(|(_, t)| (t.rss / t.n as f64).sqrt())
-            .collect(),
-        scale: s_bar,
-        jacobian_scale: c,
-        iterations,
-        converged: converged && k >= 3,
-    })
 }
 
 /// Δt on one window, with its σ (the window's least-squares error, not yet scaled).
@@ -920,6 +1237,24 @@ pub struct WindowOffset {
     pub quality: f64,
 }
 
+impl WindowOffset {
+    /// Window `w`'s offset `offset_s`, with its reduced equations `t` there (`c`: the whole fit's
+    /// secant correction); `None` when the window has no formal σ.
+    fn of(w: &Window, offset_s: f64, t: &Terms, c: f64) -> Option<WindowOffset> {
+        Some(WindowOffset {
+            t: w.t(),
+            offset_s,
+            formal_sigma_s: formal_sigma(t, c)?,
+            rms_m: t.rms_m(),
+            quality: if t.s_rr > 0.0 {
+                (1.0 - t.rss / t.s_rr).clamp(0.0, 1.0)
+            } else {
+                0.0
+            },
+        })
+    }
+}
+
 /// Each window's own Δt with the lever `lever` held, started from `start(t)` (a window that fails
 /// from there is searched ±`search_s` first). Windows that do not converge are left out.
 pub fn profile(
@@ -930,33 +1265,76 @@ pub fn profile(
     start: &(dyn Fn(f64) -> f64 + Sync),
     search_s: f64,
 ) -> Vec<WindowOffset> {
-    let problem = data.problem();
-    let shape = ClockShape::Constant;
-    let one = |w: &Window, theta0: f64| -> Option<(f64, Terms)> {
-        let mut theta = theta0;
-        let mut terms = problem.terms(w, &shape, &[theta], &lever, false, scale)?;
-        // The merit g²/H of the estimating equation, the Newton step −g/J (see `solve`).
-        let merit = |t: &Terms| t.g[0] * t.g[0] / t.h[(0, 0)];
+    let solver = WindowSolver {
+        problem: data.problem(),
+        lever_m: lever,
+        scale,
+        jacobian_scale: c,
+    };
+    let raw: Vec<Option<(f64, Terms)>> = windows
+        .par_iter()
+        .map(|w| solver.refine(w, start(w.t())))
+        .collect();
+    let mut rms: Vec<f64> = raw.iter().flatten().map(|(_, t)| t.rms_m()).collect();
+    if rms.is_empty() {
+        return Vec::new();
+    }
+    rms.sort_by(f64::total_cmp);
+    let median = rms[rms.len() / 2];
+    windows
+        .par_iter()
+        .zip(raw)
+        .filter_map(|(w, r)| {
+            let fits = |r: &(f64, Terms)| r.1.rms_m() <= OUTLIER_RMS_FACTOR * median;
+            let (theta, t) = match r {
+                Some(r) if fits(&r) => r,
+                // A window the start left in another basin (a clock step): searched first.
+                _ => solver.search(w, start(w.t()), search_s).filter(fits)?,
+            };
+            WindowOffset::of(w, theta, &t, c)
+        })
+        .collect()
+}
+
+/// The fit of one window's own Δt (one constant) with the lever held: the profile's.
+struct WindowSolver<'a> {
+    problem: Problem<'a>,
+    /// The lever held, estimate body frame.
+    lever_m: Vector3<f64>,
+    /// The mission's scale (the centre of the window's scale prior).
+    scale: f64,
+    /// The whole fit's secant correction c of the Jacobian (see [`SharedFit::secant_correction`]).
+    jacobian_scale: f64,
+}
+
+impl WindowSolver<'_> {
+    /// Window `w`'s reduced equations at the offset `offset_s`.
+    fn terms(&self, w: &Window, offset_s: f64) -> Option<Terms> {
+        self.problem.terms(
+            w,
+            &ClockShape::Constant,
+            &[offset_s],
+            &self.lever_m,
+            false,
+            self.scale,
+        )
+    }
+
+    /// Newton on window `w`'s estimating equation from `offset0_s` (the step −g/(c·J), see
+    /// [`solve`]): its root and the equations there; `None` when there is none (H or J not
+    /// positive, or the step left exceeds the window's own error).
+    fn refine(&self, w: &Window, offset0_s: f64) -> Option<(f64, Terms)> {
+        let c = self.jacobian_scale;
+        let mut theta = offset0_s;
+        let mut terms = self.terms(w, theta)?;
         for _ in 0..MAX_ITERATIONS {
             if terms.h[(0, 0)] <= 0.0 || terms.j[(0, 0)] <= 0.0 {
                 return None;
             }
             let step = (-terms.g[0] / (c * terms.j[(0, 0)])).clamp(-MAX_STEP_S, MAX_STEP_S);
-            let before = merit(&terms);
-            let mut a = 1.0;
-            let mut next = None;
-            for _ in 0..8 {
-                if let Some(t2) =
-                    problem.terms(w, &shape, &[theta + a * step], &lever, false, scale)
-                {
-                    if t2.n == terms.n && t2.h[(0, 0)] > 0.0 && merit(&t2) < before {
-                        next = Some((theta + a * step, t2));
-                        break;
-                    }
-                }
-                a *= 0.5;
-            }
-            let Some((th, t2)) = next else { break };
+            let Some((a, th, t2)) = self.halving(w, theta, step, &terms) else {
+                break;
+            };
             theta = th;
             terms = t2;
             if (a * step).abs() < 2e-6 {
@@ -970,59 +1348,44 @@ pub fn profile(
             return None;
         }
         Some((theta, terms))
-    };
-    let raw: Vec<Option<(f64, Terms)>> = windows.par_iter().map(|w| one(w, start(w.t()))).collect();
-    let mut rms: Vec<f64> = raw
-        .iter()
-        .flatten()
-        .map(|(_, t)| (t.rss / t.n as f64).sqrt())
-        .collect();
-    if rms.is_empty() {
-        return Vec::new();
     }
-    rms.sort_by(f64::total_cmp);
-    let median = rms[rms.len() / 2];
-    windows
-        .par_iter()
-        .zip(raw)
-        .filter_map(|(w, r)| {
-            let fits =
-                |r: &(f64, Terms)| (r.1.rss / r.1.n as f64).sqrt() <= OUTLIER_RMS_FACTOR * median;
-            let r = match r {
-                Some(r) if fits(&r) => r,
-                _ => {
-                    // A window the start left in another basin (a clock step): searched first.
-                    let t0 = start(w.t());
-                    let steps = (search_s / 0.05).round() as i64;
-                    let best = (-steps..=steps)
-                        .filter_map(|k| {
-                            let th = t0 + k as f64 * 0.05;
-                            problem
-                                .terms(w, &shape, &[th], &lever, false, scale)
-                                .map(|t| (th, t.rss))
-                        })
-                        .min_by(|a, b| a.1.total_cmp(&b.1))?;
-                    let r = one(w, best.0)?;
-                    if !fits(&r) {
-                        return None;
-                    }
-                    r
+
+    /// The first of `step`, its half, its quarter… (eight tries) from `theta` that keeps the
+    /// window's points and lowers the merit g²/H of its estimating equation (`terms` at `theta`):
+    /// the fraction taken, the new offset and the equations there.
+    fn halving(
+        &self,
+        w: &Window,
+        theta: f64,
+        step: f64,
+        terms: &Terms,
+    ) -> Option<(f64, f64, Terms)> {
+        let merit = |t: &Terms| t.g[0] * t.g[0] / t.h[(0, 0)];
+        let before = merit(terms);
+        let mut a = 1.0;
+        for _ in 0..8 {
+            if let Some(t2) = self.terms(w, theta + a * step) {
+                if t2.n == terms.n && t2.h[(0, 0)] > 0.0 && merit(&t2) < before {
+                    return Some((a, theta + a * step, t2));
                 }
-            };
-            let (theta, t) = r;
-            Some(WindowOffset {
-                t: w.t(),
-                offset_s: theta,
-                formal_sigma_s: formal_sigma(&t, c)?,
-                rms_m: (t.rss / t.n as f64).sqrt(),
-                quality: if t.s_rr > 0.0 {
-                    (1.0 - t.rss / t.s_rr).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                },
+            }
+            a *= 0.5;
+        }
+        None
+    }
+
+    /// Window `w`'s offset searched every 50 ms within ±`search_s` of `t0_s` (the least residual),
+    /// then refined: for a window the start left in another basin (a clock step).
+    fn search(&self, w: &Window, t0_s: f64, search_s: f64) -> Option<(f64, Terms)> {
+        let steps = (search_s / 0.05).round() as i64;
+        let best = (-steps..=steps)
+            .filter_map(|k| {
+                let th = t0_s + k as f64 * 0.05;
+                self.terms(w, th).map(|t| (th, t.rss))
             })
-        })
-        .collect()
+            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        self.refine(w, best.0)
+    }
 }
 
 /// A window's least-squares error of its one offset, seconds: σ̂·√H/(c·J) (the instrumental-variable
