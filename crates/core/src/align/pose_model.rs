@@ -74,112 +74,229 @@ pub fn pose_clock_model(
     if windows.len() < 3 {
         return None;
     }
-    // The profile's windows: the fits' own (disjoint), or every `--offset-step` seconds.
-    let profile_windows = data.profile_windows(profile_params.step_s);
-    let whole = pose_fit::fit(
-        &data,
-        &windows,
+    let mission = Mission {
+        data: &data,
+        // The profile's windows: the fits' own (disjoint), or every `--offset-step` seconds.
+        profile_windows: data.profile_windows(profile_params.step_s),
+        whole: whole_mission_fit(&data, &windows, start_s),
+        windows,
+        signals,
+        forced,
+    };
+    let chosen = mission.choose(start_s)?;
+    // Without a converged fit of the chosen model, its parameters stay those of the windows.
+    let Some(last) = chosen.fit else {
+        return mission.without_fit(chosen.profile, chosen.model, chosen.lever_m);
+    };
+    let (profile, mut model) = (chosen.profile, chosen.model);
+    let last = mission.drift_resolved(&mut model, last);
+    set_parameters(&mut model, &last, &profile);
+    model.describe();
+    Some(PoseClock {
+        profile,
+        model,
+        outlier_windows: last.outliers.len(),
+        whole: (last.theta[0], last.theta_sigma[0]),
+        lever: (last.lever_m, last.lever_sigma_m),
+        fit: Some(last),
+    })
+}
+
+/// Step 1: one Δt and the lever over every window from `start_s`; `None` when it does not converge
+/// or lands farther than [`MAX_DISAGREEMENT_S`] from the start (another basin).
+fn whole_mission_fit(
+    data: &PoseData<'_>,
+    windows: &[pose_fit::Window],
+    start_s: f64,
+) -> Option<PoseFit> {
+    pose_fit::fit(
+        data,
+        windows,
         ClockShape::Constant,
         vec![start_s],
         Vector3::zeros(),
         true,
     )
-    .filter(|w| w.converged && (w.theta[0] - start_s).abs() <= MAX_DISAGREEMENT_S);
-    // Without a whole-mission constant fit (a step or a large drift spoils it), the profile starts
-    // without a lever from the signal searches' answer, each window searching its own.
-    let (mut lever, mut scale) = whole.as_ref().map_or((Vector3::zeros(), (1.0, 1.0)), |w| {
-        (w.lever_m, (w.scale, w.jacobian_scale))
-    });
-    let mut clock = (
-        ClockShape::Constant,
-        vec![whole.as_ref().map_or(start_s, |w| w.theta[0])],
-    );
-    let mut pass = 0;
-    let (profile, mut model, last) = loop {
-        pass += 1;
-        let (shape, theta) = &clock;
+    .filter(|w| w.converged && (w.theta[0] - start_s).abs() <= MAX_DISAGREEMENT_S)
+}
+
+/// One mission's pose fits: the data, the windows of the fits and of the profile, the whole
+/// mission's constant fit, and what the model choice takes besides the profile.
+struct Mission<'a> {
+    data: &'a PoseData<'a>,
+    windows: Vec<pose_fit::Window>,
+    profile_windows: Vec<pose_fit::Window>,
+    whole: Option<PoseFit>,
+    signals: Option<(SignalView<'a>, SignalView<'a>)>,
+    forced: Option<OffsetModel>,
+}
+
+/// A profile, the model chosen from it, and that model's fit.
+struct Chosen {
+    profile: OffsetProfile,
+    model: ClockModel,
+    /// The chosen model's clock shape.
+    shape: ClockShape,
+    /// The chosen model's fit with the lever over every window; `None` when it did not converge.
+    fit: Option<PoseFit>,
+    /// The lever the profile's windows held, estimate body frame.
+    lever_m: Vector3<f64>,
+}
+
+impl Mission<'_> {
+    /// Steps 2 to 4: the profile, the model chosen from it and its fit. Measured from the whole
+    /// mission's constant fit, or without one from `start_s` with no lever; measured again with
+    /// the lever of the chosen model when that is not the constant, or when there was no constant
+    /// fit.
+    fn choose(&self, start_s: f64) -> Option<Chosen> {
+        // Without a whole-mission constant fit (a step or a large drift spoils it), the profile
+        // starts without a lever from the signal searches' answer, each window searching its own.
+        let (mut lever, mut scale) = self
+            .whole
+            .as_ref()
+            .map_or((Vector3::zeros(), (1.0, 1.0)), |w| {
+                (w.lever_m, (w.scale, w.jacobian_scale))
+            });
+        let mut clock = (
+            ClockShape::Constant,
+            vec![self.whole.as_ref().map_or(start_s, |w| w.theta[0])],
+        );
+        let mut pass = 0;
+        loop {
+            pass += 1;
+            let chosen = self.pass(lever, scale, &clock)?;
+            // A model other than the constant was chosen on windows whose lever came from a
+            // constant fit (or none): the profile is measured again with the lever of the chosen
+            // model.
+            if let (1, Some(l)) = (pass, &chosen.fit) {
+                if chosen.model.model != OffsetModel::Constant || self.whole.is_none() {
+                    lever = l.lever_m;
+                    scale = (l.scale, l.jacobian_scale);
+                    clock = (chosen.shape, l.theta.clone());
+                    continue;
+                }
+            }
+            return Some(chosen);
+        }
+    }
+
+    /// One pass: the profile with the lever `lever` held (the mission's scale and the secant
+    /// correction `scale`), each window started from the clock `clock`; the model chosen from it;
+    /// the chosen model's parameters fitted with the lever over every window, σ by the jackknife
+    /// over windows (the whole mission's fit when that is the constant). `None` with fewer than
+    /// three windows in the profile.
+    fn pass(
+        &self,
+        lever: Vector3<f64>,
+        scale: (f64, f64),
+        (shape, theta): &(ClockShape, Vec<f64>),
+    ) -> Option<Chosen> {
         let raw = pose_fit::profile(
-            &data,
-            &profile_windows,
+            self.data,
+            &self.profile_windows,
             lever,
             scale,
             &|t| shape.value(theta, t),
             WINDOW_SEARCH_S,
         );
-        let profile = calibrated_profile(consistent_windows(raw), &profile_windows)?;
-        let (offset0, whole_sigma) = match &whole {
+        let profile = calibrated_profile(consistent_windows(raw), &self.profile_windows)?;
+        let (offset0, whole_sigma) = match &self.whole {
             Some(w) => (w.theta[0], w.theta_sigma[0].max(POSE_SIGMA_FLOOR_S)),
             None => (theta[0], f64::INFINITY),
         };
-        let model = choose_model(&profile, (offset0, whole_sigma), signals, forced);
-        // The chosen model's parameters fitted with the lever over every window, σ by the
-        // jackknife over windows.
+        let model = choose_model(&profile, (offset0, whole_sigma), self.signals, self.forced);
         let (next_shape, theta0) = shape_of(&model, offset0);
-        // A window holding a change of a piecewise clock mixes two offsets: left out of its fit.
-        let kept: Vec<pose_fit::Window> = match &next_shape {
-            ClockShape::Piecewise { changes } => windows
+        let fit = match (&self.whole, model.model) {
+            (Some(w), OffsetModel::Constant) => Some(w.clone()),
+            _ => pose_fit::fit(
+                self.data,
+                &self.windows_of(&next_shape),
+                next_shape.clone(),
+                theta0,
+                lever,
+                true,
+            )
+            .filter(|f| f.converged),
+        };
+        Some(Chosen {
+            profile,
+            model,
+            shape: next_shape,
+            fit,
+            lever_m: lever,
+        })
+    }
+
+    /// The windows a fit of `shape` uses: every one, less those holding a change of a piecewise
+    /// clock (they mix two offsets).
+    fn windows_of(&self, shape: &ClockShape) -> Vec<pose_fit::Window> {
+        match shape {
+            ClockShape::Piecewise { changes } => self
+                .windows
                 .iter()
                 .filter(|w| !changes.iter().any(|&c| c > w.t_start && c < w.t_end))
                 .cloned()
                 .collect(),
-            _ => windows.clone(),
-        };
-        let last = match (&whole, model.model) {
-            (Some(w), OffsetModel::Constant) => Some(w.clone()),
-            _ => pose_fit::fit(&data, &kept, next_shape.clone(), theta0, lever, true)
-                .filter(|f| f.converged),
-        };
-        // A model other than the constant was chosen on windows whose lever came from a constant
-        // fit (or none): the profile is measured again with the lever of the chosen model.
-        if let (1, Some(l)) = (pass, &last) {
-            if model.model != OffsetModel::Constant || whole.is_none() {
-                lever = l.lever_m;
-                scale = (l.scale, l.jacobian_scale);
-                clock = (next_shape, l.theta.clone());
-                continue;
-            }
+            _ => self.windows.clone(),
         }
-        break (profile, model, last);
-    };
-    // Without a converged fit of the chosen model, its parameters stay those of the windows.
-    let Some(last) = last else {
+    }
+
+    /// The clock when the chosen model's fit did not converge: its parameters are the windows'
+    /// (a constant's the weighted mean of the `profile`), the lever the one they held. `None` when
+    /// no lever was ever fitted (no whole-mission constant fit either).
+    fn without_fit(
+        &self,
+        profile: OffsetProfile,
+        mut model: ClockModel,
+        lever_m: Vector3<f64>,
+    ) -> Option<PoseClock> {
         // No lever was ever fitted (neither the whole mission's constant nor the chosen model
         // converged): the windows held it at zero, and a forward lever then reads as Δt (0.2 m at a
         // walk is half a second) with a σ that cannot show it. The signal searches' answer stands.
-        whole.as_ref()?;
+        self.whole.as_ref()?;
         if model.model == OffsetModel::Constant {
             let (mean, sigma) = weighted_mean(&profile);
             model.offset_s = mean;
             model.sigma_s = sigma;
         }
         model.describe();
-        return Some(PoseClock {
+        Some(PoseClock {
             outlier_windows: 0,
             whole: (model.offset_s, model.sigma_s),
             fit: None,
             profile,
             model,
-            lever: (lever, None),
-        });
-    };
-    // A drift is declared only when the fitted drift exceeds the resolution of the windows (the
-    // drift their calibrated σ can tell from a constant clock): below it the data do not refute the
-    // constant, whatever the windows' BIC said (receipt-stamp latencies or a gait tilt a few
-    // windows). The constant's σ then covers the drift it may hide (see the module doc).
-    let mut last = last;
-    if forced.is_none() && model.model == OffsetModel::Linear {
-        let fitted_ppm = -last.theta[1] * 1e6;
-        if let (Some(resolution), Some(w)) = (model.drift_resolution_ppm, &whole) {
-            if fitted_ppm.abs() < resolution {
-                model.model = OffsetModel::Constant;
-                model.criterion = format!(
-                    "{}; the fitted drift {fitted_ppm:+.1} ppm is below the resolution {resolution:.1} ppm",
-                    model.criterion
-                );
-                last = w.clone();
+            lever: (lever_m, None),
+        })
+    }
+
+    /// The fit to report for `model`, whose fit is `last`: a drift is declared only when the fitted
+    /// drift exceeds the resolution of the windows (the drift their calibrated σ can tell from a
+    /// constant clock); below it the data do not refute the constant, whatever the windows' BIC
+    /// said (receipt-stamp latencies or a gait tilt a few windows), and the model becomes the whole
+    /// mission's constant. Never when the model was forced.
+    fn drift_resolved(&self, model: &mut ClockModel, last: PoseFit) -> PoseFit {
+        if self.forced.is_none() && model.model == OffsetModel::Linear {
+            let fitted_ppm = -last.theta[1] * 1e6;
+            if let (Some(resolution), Some(w)) = (model.drift_resolution_ppm, &self.whole) {
+                if fitted_ppm.abs() < resolution {
+                    model.model = OffsetModel::Constant;
+                    model.criterion = format!(
+                        "{}; the fitted drift {fitted_ppm:+.1} ppm is below the resolution {resolution:.1} ppm",
+                        model.criterion
+                    );
+                    return w.clone();
+                }
             }
         }
+        last
     }
+}
+
+/// Step 4: `model`'s parameters and their σ from its fit `last` (σ at least
+/// [`POSE_SIGMA_FLOOR_S`]). The constant's σ also covers the drift it may hide (see the module
+/// doc); the piecewise model's headline is its longest segment's.
+fn set_parameters(model: &mut ClockModel, last: &PoseFit, profile: &OffsetProfile) {
     let sigma = |k: usize| last.theta_sigma[k].max(POSE_SIGMA_FLOOR_S);
     match model.model {
         OffsetModel::Constant => {
@@ -188,7 +305,7 @@ pub fn pose_clock_model(
             let hidden = match (model.drift_ppm, model.drift_sigma_ppm) {
                 (Some(d), Some(s)) => {
                     let excess = ((d * d - s * s).max(0.0)).sqrt() * 1e-6;
-                    excess * time_spread(&profile)
+                    excess * time_spread(profile)
                 }
                 _ => 0.0,
             };
@@ -218,15 +335,6 @@ pub fn pose_clock_model(
             }
         }
     }
-    model.describe();
-    Some(PoseClock {
-        profile,
-        model,
-        outlier_windows: last.outliers.len(),
-        whole: (last.theta[0], last.theta_sigma[0]),
-        lever: (last.lever_m, last.lever_sigma_m),
-        fit: Some(last),
-    })
 }
 
 /// The clock shape of `model` and its parameters to start from.
