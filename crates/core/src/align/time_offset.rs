@@ -474,80 +474,14 @@ fn search(
         ref_end: rt[rt.len() - 1],
         offset: params.max_offset_s,
     };
-    // Coarse stage: lag k pairs est grid point n with ref grid point n + k, i.e. Δt = k·h.
+    let coarse =
+        coarse_peak(method, (rt, rv), (et, ev), params, centering, gap).ok_or_else(no_overlap)?;
+    let (offset, peak) = fine_peak((rt, rv), (et, ev), params, centering, gap, coarse.offset_s)
+        .ok_or_else(no_overlap)?;
+    let confidence = coarse.confidence();
     let h = params.coarse_grid_s;
-    // Both grids are read a block at a time, never held whole.
-    let e = LazyGrid::new(et, ev, h, gap);
-    let r = LazyGrid::new(rt, rv, h, gap);
-    let (e_def, r_def) = (e.defined_count(), r.defined_count());
-    if e_def < 3 || r_def < 3 {
-        return Err(no_overlap());
-    }
-    let k_max = (params.max_offset_s / h).floor() as i64;
-    let shift = e.first_index - r.first_index; // array lag = k + shift
-    let coarse = masked_ncc_blocks(&e, &r, -k_max + shift, k_max + shift, centering);
-    let best_overlap = coarse.overlap.iter().copied().max().unwrap_or(0);
-    if best_overlap < 3 {
-        return Err(no_overlap());
-    }
-    let min_overlap = ((MIN_OVERLAP_SHARE * best_overlap as f64).ceil() as usize).max(3);
-    let eligible: Vec<usize> = (0..coarse.len())
-        .filter(|&i| coarse.overlap[i] >= min_overlap)
-        .collect();
-    let Some(&i_peak) = eligible
-        .iter()
-        .max_by(|&&x, &&y| coarse.ncc[x].total_cmp(&coarse.ncc[y]))
-    else {
-        return Err(no_overlap());
-    };
-    let coarse_offset = (coarse.lag(i_peak) - shift) as f64 * h;
-    let overlap_fraction = coarse.overlap[i_peak] as f64 / e_def.min(r_def) as f64;
-    // Share of the time both trajectories overlap (at the peak) where both signals are defined.
-    let span = (rt[rt.len() - 1].min(et[et.len() - 1] + coarse_offset)
-        - rt[0].max(et[0] + coarse_offset))
-    .max(h);
-    let defined_fraction = (coarse.overlap[i_peak] as f64 * h / span).clamp(0.0, 1.0);
-    let min_lobe_s = match method {
-        OffsetMethod::Speed => MIN_LOBE_SPEED_S.max(params.speed_window_s),
-        _ => MIN_LOBE_CURVATURE_S,
-    };
-    let lobe = peak_separation(&coarse.ncc, &eligible, i_peak, h, min_lobe_s);
-    let (separation, prominence) = (lobe.separation, lobe.prominence);
-    let at_edge = i_peak == 0 || i_peak + 1 == coarse.len();
-
-    // Fine stage around the coarse peak.
-    let hf = params.grid_s;
-    let lo = ((coarse_offset - FINE_WINDOW_COARSE_STEPS * h) / hf).round() as i64;
-    let hi = ((coarse_offset + FINE_WINDOW_COARSE_STEPS * h) / hf).round() as i64;
-    let kf_max = (params.max_offset_s / hf).floor() as i64;
-    let (lo, hi) = (lo.max(-kf_max), hi.min(kf_max));
-    let sums = fine_sums((et, ev), (rt, rv), hf, gap, lo, hi);
-    let fine: Vec<f64> = sums.iter().map(|s| s.ncc(centering)).collect();
-    let fine_min_overlap = sums.iter().map(|s| s.n).fold(0.0, f64::max) * MIN_OVERLAP_SHARE;
-    let Some(j) = (0..fine.len())
-        .filter(|&j| sums[j].n >= fine_min_overlap.max(3.0))
-        .max_by(|&x, &y| fine[x].total_cmp(&fine[y]))
-    else {
-        return Err(no_overlap());
-    };
-    let (mut offset, mut peak) = ((lo + j as i64) as f64 * hf, fine[j]);
-    if j > 0 && j + 1 < fine.len() {
-        let (ym, y0, yp) = (fine[j - 1], fine[j], fine[j + 1]);
-        let denom = ym - 2.0 * y0 + yp;
-        if denom < 0.0 {
-            let d = (0.5 * (ym - yp) / denom).clamp(-0.5, 0.5);
-            offset += d * hf;
-            peak = y0 - 0.25 * (ym - yp) * d;
-        }
-    }
-
-    let confidence = (separation
-        * (prominence / PROMINENCE_FULL).clamp(0.0, 1.0)
-        * (overlap_fraction / OVERLAP_FULL).clamp(0.0, 1.0)
-        * (defined_fraction / DEFINED_FULL).clamp(0.0, 1.0))
-    .clamp(0.0, 1.0);
     let sigma_s = offset_sigma((rt, rv), (et, ev), offset, h, gap, centering);
-    let status = if confidence >= MIN_CONFIDENCE && peak >= MIN_CORRELATION && !at_edge {
+    let status = if confidence >= MIN_CONFIDENCE && peak >= MIN_CORRELATION && !coarse.at_edge {
         OffsetStatus::Ok
     } else {
         OffsetStatus::Weak
@@ -558,12 +492,138 @@ fn search(
         correlation: peak,
         confidence,
         status,
-        overlap_fraction,
-        margin: lobe.margin,
-        rival_offset_s: lobe.rival.map(|i| (coarse.lag(i) - shift) as f64 * h),
-        defined_fraction,
+        overlap_fraction: coarse.overlap_fraction,
+        margin: coarse.lobe.margin,
+        rival_offset_s: coarse.rival_offset_s,
+        defined_fraction: coarse.defined_fraction,
         sigma_s,
     })
+}
+
+/// The coarse stage's answer: the peak of the NCC over the whole search range, coarse grid.
+struct CoarsePeak {
+    /// Δt at the peak, seconds.
+    offset_s: f64,
+    /// Overlap at the peak over the defined points of the shorter signal.
+    overlap_fraction: f64,
+    /// Share of the two trajectories' time overlap (at the peak) where both signals are defined.
+    defined_fraction: f64,
+    /// The peak against the rest of the curve.
+    lobe: Lobe,
+    /// Δt of the best rival outside the main lobe, seconds.
+    rival_offset_s: Option<f64>,
+    /// Whether the peak is at an end of the search range.
+    at_edge: bool,
+}
+
+impl CoarsePeak {
+    /// The confidence in [0, 1] (see the module doc): the separation, times the prominence, the
+    /// overlap and the defined share, each over what counts as full.
+    fn confidence(&self) -> f64 {
+        (self.lobe.separation
+            * (self.lobe.prominence / PROMINENCE_FULL).clamp(0.0, 1.0)
+            * (self.overlap_fraction / OVERLAP_FULL).clamp(0.0, 1.0)
+            * (self.defined_fraction / DEFINED_FULL).clamp(0.0, 1.0))
+        .clamp(0.0, 1.0)
+    }
+}
+
+/// The coarse stage: the NCC of every lag within ±`max_offset_s` on the coarse grid, both grids
+/// read a block at a time (never held whole), and its peak among the lags whose overlap is at least
+/// [`MIN_OVERLAP_SHARE`] of the best. `None` when the signals do not overlap.
+fn coarse_peak(
+    method: OffsetMethod,
+    (rt, rv): (&[f64], &[f64]),
+    (et, ev): (&[f64], &[f64]),
+    params: &OffsetParams,
+    centering: Centering,
+    gap: f64,
+) -> Option<CoarsePeak> {
+    // Lag k pairs est grid point n with ref grid point n + k, i.e. Δt = k·h.
+    let h = params.coarse_grid_s;
+    let e = LazyGrid::new(et, ev, h, gap);
+    let r = LazyGrid::new(rt, rv, h, gap);
+    let (e_def, r_def) = (e.defined_count(), r.defined_count());
+    if e_def < 3 || r_def < 3 {
+        return None;
+    }
+    let k_max = (params.max_offset_s / h).floor() as i64;
+    let shift = e.first_index - r.first_index; // array lag = k + shift
+    let coarse = masked_ncc_blocks(&e, &r, -k_max + shift, k_max + shift, centering);
+    let best_overlap = coarse.overlap.iter().copied().max().unwrap_or(0);
+    if best_overlap < 3 {
+        return None;
+    }
+    let min_overlap = ((MIN_OVERLAP_SHARE * best_overlap as f64).ceil() as usize).max(3);
+    let eligible: Vec<usize> = (0..coarse.len())
+        .filter(|&i| coarse.overlap[i] >= min_overlap)
+        .collect();
+    let &i_peak = eligible
+        .iter()
+        .max_by(|&&x, &&y| coarse.ncc[x].total_cmp(&coarse.ncc[y]))?;
+    let offset_s = (coarse.lag(i_peak) - shift) as f64 * h;
+    let overlap_fraction = coarse.overlap[i_peak] as f64 / e_def.min(r_def) as f64;
+    // Share of the time both trajectories overlap (at the peak) where both signals are defined.
+    let span =
+        (rt[rt.len() - 1].min(et[et.len() - 1] + offset_s) - rt[0].max(et[0] + offset_s)).max(h);
+    let defined_fraction = (coarse.overlap[i_peak] as f64 * h / span).clamp(0.0, 1.0);
+    let min_lobe_s = match method {
+        OffsetMethod::Speed => MIN_LOBE_SPEED_S.max(params.speed_window_s),
+        _ => MIN_LOBE_CURVATURE_S,
+    };
+    let lobe = peak_separation(&coarse.ncc, &eligible, i_peak, h, min_lobe_s);
+    Some(CoarsePeak {
+        offset_s,
+        overlap_fraction,
+        defined_fraction,
+        rival_offset_s: lobe.rival.map(|i| (coarse.lag(i) - shift) as f64 * h),
+        lobe,
+        at_edge: i_peak == 0 || i_peak + 1 == coarse.len(),
+    })
+}
+
+/// The fine stage: every fine step (`grid_s`) within ±[`FINE_WINDOW_COARSE_STEPS`] coarse steps of
+/// the coarse peak `coarse_offset_s`, the best NCC among the lags whose overlap is at least
+/// [`MIN_OVERLAP_SHARE`] of the best, refined between the steps ([`parabola_peak`]): Δt and the
+/// peak NCC. `None` when no lag overlaps.
+fn fine_peak(
+    (rt, rv): (&[f64], &[f64]),
+    (et, ev): (&[f64], &[f64]),
+    params: &OffsetParams,
+    centering: Centering,
+    gap: f64,
+    coarse_offset_s: f64,
+) -> Option<(f64, f64)> {
+    let h = params.coarse_grid_s;
+    let hf = params.grid_s;
+    let lo = ((coarse_offset_s - FINE_WINDOW_COARSE_STEPS * h) / hf).round() as i64;
+    let hi = ((coarse_offset_s + FINE_WINDOW_COARSE_STEPS * h) / hf).round() as i64;
+    let kf_max = (params.max_offset_s / hf).floor() as i64;
+    let (lo, hi) = (lo.max(-kf_max), hi.min(kf_max));
+    let sums = fine_sums((et, ev), (rt, rv), hf, gap, lo, hi);
+    let fine: Vec<f64> = sums.iter().map(|s| s.ncc(centering)).collect();
+    let fine_min_overlap = sums.iter().map(|s| s.n).fold(0.0, f64::max) * MIN_OVERLAP_SHARE;
+    let j = (0..fine.len())
+        .filter(|&j| sums[j].n >= fine_min_overlap.max(3.0))
+        .max_by(|&x, &y| fine[x].total_cmp(&fine[y]))?;
+    Some(parabola_peak(&fine, j, (lo + j as i64) as f64 * hf, hf))
+}
+
+/// The sub-step peak of `ncc` around its best index `j` (at Δt `offset_s`, steps of `step_s`): the
+/// vertex of the parabola through j and its neighbours when it opens downwards, at most half a step
+/// away; Δt and the NCC there.
+fn parabola_peak(ncc: &[f64], j: usize, offset_s: f64, step_s: f64) -> (f64, f64) {
+    let (mut offset, mut peak) = (offset_s, ncc[j]);
+    if j > 0 && j + 1 < ncc.len() {
+        let (ym, y0, yp) = (ncc[j - 1], ncc[j], ncc[j + 1]);
+        let denom = ym - 2.0 * y0 + yp;
+        if denom < 0.0 {
+            let d = (0.5 * (ym - yp) / denom).clamp(-0.5, 0.5);
+            offset += d * step_s;
+            peak = y0 - 0.25 * (ym - yp) * d;
+        }
+    }
+    (offset, peak)
 }
 
 /// The samples of a signal outside every interval of `exclude` (the grid does not interpolate across
