@@ -277,79 +277,87 @@ pub fn choose_model(
         );
     };
     let t_mid = 0.5 * (w[0].t + w[w.len() - 1].t);
-    let bic = |chi2: f64, k: f64| chi2 / rho + k * n_eff.max(1.0).ln();
-    let lin = fit(&w, t_mid, true, rho);
     let min_len = (2.0 * rho).ceil() as usize;
     let splits = segment(&w, min_len, rho, n_eff);
-    let pieces: Vec<Fit> = bounds(&splits, w.len())
-        .windows(2)
-        .filter_map(|b| fit(&w[b[0]..b[1]], 0.0, false, rho))
-        .collect();
-    let bic_c = bic(c.chi2, 1.0);
-    let bic_l = lin.map_or(f64::INFINITY, |l| bic(l.chi2, 2.0));
-    let bic_p = if splits.is_empty() {
-        f64::INFINITY
-    } else {
-        bic(
-            pieces.iter().map(|p| p.chi2).sum(),
-            (2 * splits.len() + 1) as f64,
-        )
+    let fits = Fits {
+        constant: c,
+        linear: fit(&w, t_mid, true, rho),
+        windows: &w,
+        splits: &splits,
     };
-    // The drift's σ from the windows' σ, raised by the scatter about the line where it exceeds them.
-    let drift = lin.map(|l| {
-        let dof = (w.len() as f64 - 2.0).max(1.0);
-        let birge = (l.chi2 / rho / (dof / rho)).sqrt().max(1.0);
-        (-l.b * 1e6, l.sigma_b * 1e6 * birge)
-    });
+    let criterion = Criterion {
+        bic: fits.bics(rho, n_eff),
+        n_windows: w.len(),
+        n_eff,
+        window_s: profile.window_s,
+    };
+    let drift = fits.drift_ppm(rho);
     let z = (BIC_MARGIN + n_eff.max(1.0).ln()).sqrt();
-    let enough = n_eff >= MIN_INDEPENDENT_WINDOWS;
-    let chosen = forced.unwrap_or_else(|| {
+    let mut model = ClockModel {
+        model: forced.unwrap_or_else(|| criterion.choice()),
+        offset_s: whole.0,
+        sigma_s: whole_sigma.max(c.sigma_a),
+        t_mid,
+        drift_ppm: drift.map(|d| d.0),
+        drift_sigma_ppm: drift.map(|d| d.1),
+        drift_resolution_ppm: drift.map(|d| z * d.1),
+        segments: Vec::new(),
+        bic: criterion.bic,
+        reason: String::new(),
+        criterion: criterion.verdict(forced.is_some()),
+    };
+    fill(&mut model, &fits, profile, signals);
+    model.describe();
+    model
+}
+
+/// The criterion over a profile (see the module doc): the BIC of the constant, linear and piecewise
+/// models over its `n_windows` usable windows of `window_s` seconds, `n_eff` of them independent.
+struct Criterion {
+    bic: [f64; 3],
+    n_windows: usize,
+    n_eff: f64,
+    window_s: f64,
+}
+
+impl Criterion {
+    /// Whether the profile has independent windows enough to refute the constant.
+    fn enough(&self) -> bool {
+        self.n_eff >= MIN_INDEPENDENT_WINDOWS
+    }
+
+    /// The simplest model whose BIC is within [`BIC_MARGIN`] of the lowest, in the order constant,
+    /// linear, piecewise; the constant on too few independent windows.
+    fn choice(&self) -> OffsetModel {
+        let [bic_c, bic_l, bic_p] = self.bic;
         let best = bic_c.min(bic_l).min(bic_p);
-        if !enough || bic_c <= best + BIC_MARGIN {
+        if !self.enough() || bic_c <= best + BIC_MARGIN {
             OffsetModel::Constant
         } else if bic_l <= best + BIC_MARGIN {
             OffsetModel::Linear
         } else {
             OffsetModel::Piecewise
         }
-    });
-    let constant_sigma = whole_sigma.max(c.sigma_a);
-    let mut model = ClockModel {
-        model: chosen,
-        offset_s: whole.0,
-        sigma_s: constant_sigma,
-        t_mid,
-        drift_ppm: drift.map(|d| d.0),
-        drift_sigma_ppm: drift.map(|d| d.1),
-        drift_resolution_ppm: drift.map(|d| z * d.1),
-        segments: Vec::new(),
-        bic: [bic_c, bic_l, bic_p],
-        reason: String::new(),
-        criterion: String::new(),
-    };
-    model.criterion = if forced.is_some() {
-        "forced with --offset-model".to_string()
-    } else if !enough {
-        format!(
-            "{:.1} independent windows of {:.0} s are too few to refute it",
-            n_eff, profile.window_s
-        )
-    } else {
-        format!(
-            "BIC constant {bic_c:.1}, linear {bic_l:.1}, piecewise {bic_p:.1} over {} windows of {:.0} s (a more complex model must be {BIC_MARGIN:.0} lower)",
-            w.len(),
-            profile.window_s
-        )
-    };
-    let fits = Fits {
-        constant: c,
-        linear: lin,
-        windows: &w,
-        splits: &splits,
-    };
-    fill(&mut model, &fits, profile, signals);
-    model.describe();
-    model
+    }
+
+    /// The verdict a model's reason ends with (`forced`: the model came from `--offset-model`).
+    fn verdict(&self, forced: bool) -> String {
+        let [bic_c, bic_l, bic_p] = self.bic;
+        if forced {
+            "forced with --offset-model".to_string()
+        } else if !self.enough() {
+            format!(
+                "{:.1} independent windows of {:.0} s are too few to refute it",
+                self.n_eff, self.window_s
+            )
+        } else {
+            format!(
+                "BIC constant {bic_c:.1}, linear {bic_l:.1}, piecewise {bic_p:.1} over {} windows of {:.0} s (a more complex model must be {BIC_MARGIN:.0} lower)",
+                self.n_windows,
+                self.window_s
+            )
+        }
+    }
 }
 
 /// The fits behind a model choice.
@@ -358,6 +366,40 @@ struct Fits<'a> {
     linear: Option<Fit>,
     windows: &'a [ProfileWindow],
     splits: &'a [usize],
+}
+
+impl Fits<'_> {
+    /// BIC = χ²/ρ + k·ln(n/ρ) of the constant, linear and piecewise models (`rho`: ρ, `n_eff`: n/ρ);
+    /// ∞ for a linear model that could not be fitted and for steps when none was found.
+    fn bics(&self, rho: f64, n_eff: f64) -> [f64; 3] {
+        let bic = |chi2: f64, k: f64| chi2 / rho + k * n_eff.max(1.0).ln();
+        let w = self.windows;
+        let pieces: Vec<Fit> = bounds(self.splits, w.len())
+            .windows(2)
+            .filter_map(|b| fit(&w[b[0]..b[1]], 0.0, false, rho))
+            .collect();
+        let bic_c = bic(self.constant.chi2, 1.0);
+        let bic_l = self.linear.map_or(f64::INFINITY, |l| bic(l.chi2, 2.0));
+        let bic_p = if self.splits.is_empty() {
+            f64::INFINITY
+        } else {
+            bic(
+                pieces.iter().map(|p| p.chi2).sum(),
+                (2 * self.splits.len() + 1) as f64,
+            )
+        };
+        [bic_c, bic_l, bic_p]
+    }
+
+    /// The linear fit's drift and its σ, ppm (positive: the estimate's clock runs fast): the σ from
+    /// the windows' σ, raised by the scatter about the line where it exceeds them.
+    fn drift_ppm(&self, rho: f64) -> Option<(f64, f64)> {
+        self.linear.map(|l| {
+            let dof = (self.windows.len() as f64 - 2.0).max(1.0);
+            let birge = (l.chi2 / rho / (dof / rho)).sqrt().max(1.0);
+            (-l.b * 1e6, l.sigma_b * 1e6 * birge)
+        })
+    }
 }
 
 /// Sets the chosen model's parameters.
