@@ -105,102 +105,148 @@ pub struct CopyOutcome {
 
 const PROGRESS_STEP: u64 = 1 << 20;
 
-/// Copies `input` into `out` record by record, calling `annotations` along the way. `options` sets the
-/// output's compression and library; the profile is taken from the input's header. Returns the sink
-/// (to flush and sync).
-pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
-    input: &Path,
-    out: W,
-    output_path: &Path,
-    options: mcap::WriteOptions,
-    annotations: &mut A,
-    progress: Progress<'_>,
-) -> Result<(CopyOutcome, W)> {
-    let (mut file, mut reader, magic, file_size) = open_linear(input)?;
+/// The input side of the copy: the input's records in file order, read through the linear reader
+/// (each record's lengths checked before it is parsed), with progress; a file that ends early ends
+/// the stream and says where.
+struct RecordStream<'a> {
+    input: &'a Path,
+    file: std::fs::File,
+    reader: mcap::sans_io::LinearReader,
+    file_size: u64,
+    bytes_read: u64,
+    last_progress: u64,
+    progress: Progress<'a>,
+    /// `Some(offset)` once the input ended early.
+    truncated_at: Option<u64>,
+}
 
-    let corrupt = |detail: String| Error::CorruptMcap {
-        path: input.to_path_buf(),
-        detail,
-    };
-    let write_err = |e: McapError| Error::Output {
-        path: output_path.to_path_buf(),
-        detail: e.to_string(),
-    };
-    let mut options = Some(options);
-    let mut out = Some(out);
-    let mut writer: Option<Writer<W>> = None;
-    let mut channels: HashMap<u16, InputChannel> = HashMap::new();
-    let mut schemas: HashMap<u16, (String, std::sync::Arc<[u8]>)> = HashMap::new();
-    let mut outcome = CopyOutcome::default();
-    let mut bytes_read = magic.len() as u64;
-    let mut last_progress = 0;
+impl<'a> RecordStream<'a> {
+    fn open(input: &'a Path, progress: Progress<'a>) -> Result<RecordStream<'a>> {
+        let (file, reader, magic, file_size) = open_linear(input)?;
+        Ok(RecordStream {
+            input,
+            file,
+            reader,
+            file_size,
+            bytes_read: magic.len() as u64,
+            last_progress: 0,
+            progress,
+            truncated_at: None,
+        })
+    }
 
-    // The writer is created at the input's header (to keep its profile), or at the first other record
-    // of a file without one.
-    let mut ensure_writer =
-        |writer: &mut Option<Writer<W>>, profile: &str, annotations: &mut A| -> Result<()> {
-            if writer.is_none() {
-                let (Some(o), Some(sink)) = (options.take(), out.take()) else {
-                    return Ok(());
-                };
-                let mut w = o.profile(profile).create(sink).map_err(write_err)?;
-                annotations.start(&mut w)?;
-                *writer = Some(w);
-            }
-            Ok(())
-        };
+    fn corrupt(&self, detail: String) -> Error {
+        Error::CorruptMcap {
+            path: self.input.to_path_buf(),
+            detail,
+        }
+    }
 
-    while let Some(event) = reader.next_event() {
-        let event = match event {
-            Ok(event) => event,
-            Err(McapError::UnexpectedEof) => {
-                outcome.truncated_at = Some(bytes_read);
-                break;
-            }
-            Err(e) => {
-                return Err(corrupt(format!(
-                    "{e} (before byte {bytes_read} of {file_size})"
-                )))
-            }
-        };
-        let (opcode, data) = match event {
-            LinearReadEvent::ReadRequest(need) => {
-                let n = fill(
-                    &mut reader,
-                    &mut file,
-                    need,
-                    file_size.saturating_sub(bytes_read),
-                )
-                .map_err(|e| Error::io(input, e))?;
-                bytes_read += n as u64;
-                if bytes_read - last_progress >= PROGRESS_STEP {
-                    last_progress = bytes_read;
-                    progress(bytes_read);
+    /// Calls `each` with every record up to the data's end (or where a truncated file ends).
+    fn for_each(&mut self, mut each: impl FnMut(Record<'_>) -> Result<()>) -> Result<()> {
+        while let Some(event) = self.reader.next_event() {
+            let (opcode, data) = match event {
+                Ok(LinearReadEvent::ReadRequest(need)) => {
+                    let left = self.file_size.saturating_sub(self.bytes_read);
+                    let n = fill(&mut self.reader, &mut self.file, need, left)
+                        .map_err(|e| Error::io(self.input, e))?;
+                    self.bytes_read += n as u64;
+                    if self.bytes_read - self.last_progress >= PROGRESS_STEP {
+                        self.last_progress = self.bytes_read;
+                        (self.progress)(self.bytes_read);
+                    }
+                    continue;
                 }
-                continue;
+                Ok(LinearReadEvent::Record { opcode, data }) => (opcode, data),
+                Err(McapError::UnexpectedEof) => {
+                    self.truncated_at = Some(self.bytes_read);
+                    return Ok(());
+                }
+                Err(e) => {
+                    let detail = format!(
+                        "{e} (before byte {} of {})",
+                        self.bytes_read, self.file_size
+                    );
+                    return Err(self.corrupt(detail));
+                }
+            };
+            if opcode == op::DATA_END {
+                return Ok(());
             }
-            LinearReadEvent::Record { opcode, data } => (opcode, data),
-        };
-        if opcode == op::DATA_END {
-            break;
+            let corrupt = |detail: String| Error::CorruptMcap {
+                path: self.input.to_path_buf(),
+                detail: format!("record 0x{opcode:02x}: {detail}"),
+            };
+            crate::sources::mcap::lengths::check_record(opcode, data)
+                .map_err(|d| corrupt(d.to_string()))?;
+            each(mcap::parse_record(opcode, data).map_err(|e| corrupt(e.to_string()))?)?;
         }
-        crate::sources::mcap::lengths::check_record(opcode, data)
-            .map_err(|d| corrupt(format!("record 0x{opcode:02x}: {d}")))?;
-        let record = mcap::parse_record(opcode, data)
-            .map_err(|e| corrupt(format!("record 0x{opcode:02x}: {e}")))?;
+        Ok(())
+    }
+}
+
+/// The output side of the copy: the writer (created at the input's header, to keep its profile, or
+/// at the first other record of a file without one), the input's channels and schemas as they are
+/// declared, and what was copied.
+struct RecordCopier<'a, W: Write + Seek> {
+    input: &'a Path,
+    output_path: &'a Path,
+    options: Option<mcap::WriteOptions>,
+    out: Option<W>,
+    writer: Option<Writer<W>>,
+    channels: HashMap<u16, InputChannel>,
+    schemas: HashMap<u16, (String, std::sync::Arc<[u8]>)>,
+    outcome: CopyOutcome,
+}
+
+impl<W: Write + Seek> RecordCopier<'_, W> {
+    fn write_err(&self, e: McapError) -> Error {
+        Error::Output {
+            path: self.output_path.to_path_buf(),
+            detail: e.to_string(),
+        }
+    }
+
+    /// Creates the writer with `profile` unless it exists.
+    fn ensure_writer<A: Annotations<W>>(
+        &mut self,
+        profile: &str,
+        annotations: &mut A,
+    ) -> Result<()> {
+        if self.writer.is_none() {
+            let (Some(o), Some(sink)) = (self.options.take(), self.out.take()) else {
+                return Ok(());
+            };
+            let mut w = o
+                .profile(profile)
+                .create(sink)
+                .map_err(|e| self.write_err(e))?;
+            annotations.start(&mut w)?;
+            self.writer = Some(w);
+        }
+        Ok(())
+    }
+
+    /// Copies one record: schemas, channels, messages (through the annotations), attachments and
+    /// metadata; indexes, statistics, chunk framing and summary records are rewritten by the writer.
+    fn copy<A: Annotations<W>>(&mut self, record: Record<'_>, annotations: &mut A) -> Result<()> {
         if let Record::Header(h) = &record {
-            ensure_writer(&mut writer, &h.profile, annotations)?;
-            continue;
+            return self.ensure_writer(&h.profile, annotations);
         }
-        ensure_writer(&mut writer, "", annotations)?;
-        let Some(w) = writer.as_mut() else {
-            continue;
+        self.ensure_writer("", annotations)?;
+        let output_path = self.output_path;
+        let write_err = |e: McapError| Error::Output {
+            path: output_path.to_path_buf(),
+            detail: e.to_string(),
+        };
+        let Some(w) = self.writer.as_mut() else {
+            return Ok(());
         };
         match record {
             Record::Schema { header, data } => {
                 w.add_schema_with_id(header.id, &header.name, &header.encoding, &data)
                     .map_err(write_err)?;
-                schemas
+                self.schemas
                     .entry(header.id)
                     .or_insert_with(|| (header.name.clone(), data.to_vec().into()));
             }
@@ -213,11 +259,12 @@ pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
                     &c.metadata,
                 )
                 .map_err(write_err)?;
-                let (schema_name, schema_data) = schemas
+                let (schema_name, schema_data) = self
+                    .schemas
                     .get(&c.schema_id)
                     .cloned()
                     .unwrap_or_else(|| (String::new(), std::sync::Arc::from(&[][..])));
-                channels.entry(c.id).or_insert(InputChannel {
+                self.channels.entry(c.id).or_insert(InputChannel {
                     id: c.id,
                     schema_id: c.schema_id,
                     topic: c.topic,
@@ -227,16 +274,20 @@ pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
                 });
             }
             Record::Message { header, data } => {
-                let channel = channels.get(&header.channel_id).ok_or_else(|| {
-                    corrupt(format!(
-                        "message on channel {} before its channel record",
-                        header.channel_id
-                    ))
-                })?;
+                let channel =
+                    self.channels
+                        .get(&header.channel_id)
+                        .ok_or_else(|| Error::CorruptMcap {
+                            path: self.input.to_path_buf(),
+                            detail: format!(
+                                "message on channel {} before its channel record",
+                                header.channel_id
+                            ),
+                        })?;
                 let log_time =
                     write_message(w, annotations, 0, channel, &header, &data, output_path)?;
-                outcome.messages += 1;
-                outcome.last_log_time = outcome.last_log_time.max(log_time);
+                self.outcome.messages += 1;
+                self.outcome.last_log_time = self.outcome.last_log_time.max(log_time);
             }
             Record::Attachment { header, data, .. } => {
                 w.attach(&mcap::Attachment {
@@ -247,22 +298,48 @@ pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
                     data,
                 })
                 .map_err(write_err)?;
-                outcome.attachments += 1;
+                self.outcome.attachments += 1;
             }
             Record::Metadata(m) => {
                 w.write_metadata(&m).map_err(write_err)?;
-                outcome.metadata += 1;
+                self.outcome.metadata += 1;
             }
-            // Indexes, statistics, chunk framing and summary records are rewritten by the writer.
             _ => {}
         }
+        Ok(())
     }
-    progress(bytes_read);
-    ensure_writer(&mut writer, "", annotations)?;
-    let Some(mut w) = writer else {
-        return Err(corrupt("no record could be read".into()));
+}
+
+/// Copies `input` into `out` record by record, calling `annotations` along the way. `options` sets the
+/// output's compression and library; the profile is taken from the input's header. Returns the sink
+/// (to flush and sync).
+pub fn copy_with<W: Write + Seek, A: Annotations<W>>(
+    input: &Path,
+    out: W,
+    output_path: &Path,
+    options: mcap::WriteOptions,
+    annotations: &mut A,
+    progress: Progress<'_>,
+) -> Result<(CopyOutcome, W)> {
+    let mut records = RecordStream::open(input, progress)?;
+    let mut copier = RecordCopier {
+        input,
+        output_path,
+        options: Some(options),
+        out: Some(out),
+        writer: None,
+        channels: HashMap::new(),
+        schemas: HashMap::new(),
+        outcome: CopyOutcome::default(),
+    };
+    records.for_each(|record| copier.copy(record, annotations))?;
+    copier.outcome.truncated_at = records.truncated_at;
+    (records.progress)(records.bytes_read);
+    copier.ensure_writer("", annotations)?;
+    let Some(mut w) = copier.writer.take() else {
+        return Err(records.corrupt("no record could be read".into()));
     };
     annotations.finish(&mut w)?;
-    w.finish().map_err(write_err)?;
-    Ok((outcome, w.into_inner()))
+    w.finish().map_err(|e| copier.write_err(e))?;
+    Ok((copier.outcome, w.into_inner()))
 }
