@@ -545,12 +545,16 @@ impl SharedColumns {
 /// Nᵀe), the instrument against the same (VᵀV, VᵀX, Vᵀe), and the residual sum of squares.
 struct NormalSums {
     ntn: SMatrix<f64, 8, 8>,
-    ntv: DMatrix<f64>,
     nte: SMatrix<f64, 8, 1>,
-    ntx: DMatrix<f64>,
-    vtv: DMatrix<f64>,
-    vtx: DMatrix<f64>,
-    vte: DVector<f64>,
+    /// NᵀV, NᵀX (8 × p) and VᵀV, VᵀX (p × p), row-major: one point adds to each entry in turn, so
+    /// the entries a point touches lie next to each other (each entry's sum is the same sum, in the
+    /// same order, as in a matrix type's storage; only the memory walk differs).
+    ntv: Vec<f64>,
+    ntx: Vec<f64>,
+    vtv: Vec<f64>,
+    vtx: Vec<f64>,
+    vte: Vec<f64>,
+    p: usize,
     rss: f64,
 }
 
@@ -559,12 +563,13 @@ impl NormalSums {
     fn zeros(p: usize) -> NormalSums {
         NormalSums {
             ntn: SMatrix::<f64, 8, 8>::zeros(),
-            ntv: DMatrix::<f64>::zeros(8, p),
             nte: SMatrix::<f64, 8, 1>::zeros(),
-            ntx: DMatrix::<f64>::zeros(8, p),
-            vtv: DMatrix::<f64>::zeros(p, p),
-            vtx: DMatrix::<f64>::zeros(p, p),
-            vte: DVector::<f64>::zeros(p),
+            ntv: vec![0.0; 8 * p],
+            ntx: vec![0.0; 8 * p],
+            vtv: vec![0.0; p * p],
+            vtx: vec![0.0; p * p],
+            vte: vec![0.0; p],
+            p,
             rss: 0.0,
         }
     }
@@ -578,25 +583,33 @@ impl NormalSums {
         v: &[Vector3<f64>],
         x: &[Vector3<f64>],
     ) {
-        let p = v.len();
+        let p = self.p;
         self.rss += e.norm_squared();
         for a in 0..8 {
-            self.nte[a] += cols[a].dot(e);
+            let ca = &cols[a];
+            self.nte[a] += ca.dot(e);
             for b in a..8 {
-                self.ntn[(a, b)] += cols[a].dot(&cols[b]);
+                self.ntn[(a, b)] += ca.dot(&cols[b]);
             }
-            for b in 0..p {
-                self.ntv[(a, b)] += cols[a].dot(&v[b]);
-                self.ntx[(a, b)] += cols[a].dot(&x[b]);
+            let rows = self.ntv[a * p..(a + 1) * p]
+                .iter_mut()
+                .zip(&mut self.ntx[a * p..(a + 1) * p]);
+            for ((sv, sx), (vb, xb)) in rows.zip(v.iter().zip(x)) {
+                *sv += ca.dot(vb);
+                *sx += ca.dot(xb);
             }
         }
         for (a, va) in v.iter().enumerate() {
             self.vte[a] += va.dot(e);
-            for b in 0..p {
+            let (vtv, vtx) = (
+                &mut self.vtv[a * p..(a + 1) * p],
+                &mut self.vtx[a * p..(a + 1) * p],
+            );
+            for (b, (vb, xb)) in v.iter().zip(x).enumerate() {
                 if b >= a {
-                    self.vtv[(a, b)] += va.dot(&v[b]);
+                    vtv[b] += va.dot(vb);
                 }
-                self.vtx[(a, b)] += va.dot(&x[b]);
+                vtx[b] += va.dot(xb);
             }
         }
     }
@@ -611,7 +624,7 @@ impl NormalSums {
         nf: f64,
         s_bar: f64,
     ) -> Option<(DMatrix<f64>, DMatrix<f64>, DVector<f64>)> {
-        let p = self.vtv.nrows();
+        let p = self.p;
         for a in 0..8 {
             for b in 0..a {
                 self.ntn[(a, b)] = self.ntn[(b, a)];
@@ -619,7 +632,7 @@ impl NormalSums {
         }
         for a in 0..p {
             for b in 0..a {
-                self.vtv[(a, b)] = self.vtv[(b, a)];
+                self.vtv[a * p + b] = self.vtv[b * p + a];
             }
         }
         // The priors: residuals √λ·(s − s̄) and √λ_b·b.
@@ -636,11 +649,15 @@ impl NormalSums {
         }
         let inv = self.ntn.try_inverse()?;
         let ntn_inv = DMatrix::from_fn(8, 8, |a, b| inv[(a, b)]);
-        let xv = &ntn_inv * &self.ntv;
-        let h = &self.vtv - self.ntv.transpose() * &xv;
-        let j = &self.vtx - xv.transpose() * &self.ntx;
+        let ntv = DMatrix::from_row_slice(8, p, &self.ntv);
+        let ntx = DMatrix::from_row_slice(8, p, &self.ntx);
+        let vtv = DMatrix::from_row_slice(p, p, &self.vtv);
+        let vtx = DMatrix::from_row_slice(p, p, &self.vtx);
+        let xv = &ntn_inv * &ntv;
+        let h = &vtv - ntv.transpose() * &xv;
+        let j = &vtx - xv.transpose() * &ntx;
         let nte_d = DVector::from_fn(8, |a, _| self.nte[a]);
-        let g = &self.vte - xv.transpose() * nte_d;
+        let g = DVector::from_column_slice(&self.vte) - xv.transpose() * nte_d;
         Some((h, j, g))
     }
 }
