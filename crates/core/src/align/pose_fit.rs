@@ -588,8 +588,8 @@ impl NormalSums {
         for a in 0..8 {
             let ca = &cols[a];
             self.nte[a] += ca.dot(e);
-            for b in a..8 {
-                self.ntn[(a, b)] += ca.dot(&cols[b]);
+            for (b, cb) in cols.iter().enumerate().skip(a) {
+                self.ntn[(a, b)] += ca.dot(cb);
             }
             let rows = self.ntv[a * p..(a + 1) * p]
                 .iter_mut()
