@@ -206,7 +206,8 @@ Examples:
   trajdrift validate --missions 50 --kind legged,step --json grades.json
   trajdrift validate --missions 3 --seed 100      # other seeds, a quick look
   # The accuracy to expect on your recording: 20 missions of its shape, known offsets injected
-  trajdrift validate --like fixtures/sim_ground/mission.mcap --reference /reference/position --estimate /estimate/odom --missions 20";
+  trajdrift validate --like fixtures/sim_ground/mission.mcap --reference /reference/position --estimate /estimate/odom --missions 20
+  trajdrift validate --reference-file gt.tum --estimate-file lio.tum     # the same, shaped like two TUM files";
 
     pub const MAN: &str = "\
 Examples:
@@ -783,6 +784,8 @@ pub struct OffsetArgs {
 }
 
 #[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("like_reference").args(["reference", "reference_file"])))]
+#[command(group(clap::ArgGroup::new("like_estimate").args(["estimate", "estimate_file"])))]
 pub struct ValidateArgs {
     /// Missions of each kind (1–10000).
     #[arg(long, value_name = "N", default_value_t = 10,
@@ -800,9 +803,9 @@ pub struct ValidateArgs {
     pub json: Option<PathBuf>,
     /// Missions shaped like this recording instead (MCAP, ROS 1 bag, rosbag2 folder, several files of
     /// one mission or a mission folder): its reference's route, both rates and noise levels, its
-    /// outages; known clock offsets injected. Needs --reference and --estimate.
+    /// outages; known clock offsets injected. Needs a reference and an estimate (topics or files).
     #[arg(long, value_name = "RECORDING", num_args = 1.., conflicts_with = "kind",
-          requires_all = ["reference", "estimate"])]
+          requires_all = ["like_reference", "like_estimate"])]
     pub like: Vec<PathBuf>,
     /// With --like: the reference topic.
     #[arg(long, value_name = "TOPIC", requires = "like")]
@@ -810,4 +813,21 @@ pub struct ValidateArgs {
     /// With --like: the estimate topic.
     #[arg(long, value_name = "TOPIC", requires = "like")]
     pub estimate: Option<String>,
+    /// Missions shaped like this text trajectory's (TUM, KITTI, EuRoC, CSV) as the reference, with
+    /// --estimate-file (or --like's estimate topic).
+    #[arg(
+        long,
+        value_name = "FILE",
+        conflicts_with = "kind",
+        requires = "like_estimate"
+    )]
+    pub reference_file: Option<PathBuf>,
+    /// The estimate from a text file, for missions shaped like it and the reference.
+    #[arg(
+        long,
+        value_name = "FILE",
+        conflicts_with = "kind",
+        requires = "like_reference"
+    )]
+    pub estimate_file: Option<PathBuf>,
 }

@@ -333,3 +333,23 @@ fn validate_like_reads_the_recording_s_shape_and_grades_missions_of_it() {
     assert!(err.contains("would destroy the input"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn validate_like_takes_its_shape_from_text_trajectories_too() {
+    let Some(shared) = crate::common::shared() else {
+        return;
+    };
+    let dir = shared.join("fixtures").join("legged");
+    let o = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+        .args(["validate", "--missions", "2", "--reference-file"])
+        .arg(dir.join("reference.tum"))
+        .arg("--estimate-file")
+        .arg(dir.join("estimate.tum"))
+        .output()
+        .expect("run trajdrift");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(table.contains("reference 20.0 Hz"), "{table}");
+    assert!(table.contains("simulated as a legged robot"), "{table}");
+    assert!(table.contains("| 2 | 2 |"), "{table}");
+}

@@ -18,7 +18,7 @@ pub fn run(a: ValidateArgs) -> Result<u8> {
     if let Some(path) = &a.json {
         guard.claim("--json", path)?;
     }
-    if !a.like.is_empty() {
+    if !a.like.is_empty() || a.reference_file.is_some() || a.estimate_file.is_some() {
         return like(&a, &mut guard);
     }
     let options = ValidateOptions {
@@ -49,24 +49,34 @@ pub fn run(a: ValidateArgs) -> Result<u8> {
 fn like(a: &ValidateArgs, guard: &mut OutputGuard) -> Result<u8> {
     use trajdrift::eval::config::{EvalConfig, NamedInput};
     let files = trajdrift::audit::discover::expand_files(&a.like)?;
-    *guard = OutputGuard::new(a.like.iter().chain(&files));
+    let texts = a.reference_file.iter().chain(&a.estimate_file);
+    *guard = OutputGuard::new(a.like.iter().chain(&files).chain(texts));
     if let Some(path) = &a.json {
         guard.claim("--json", path)?;
     }
-    let (Some(reference), Some(estimate)) = (&a.reference, &a.estimate) else {
-        anyhow::bail!("validate --like needs --reference TOPIC and --estimate TOPIC");
+    let reference = match (&a.reference, &a.reference_file) {
+        (Some(t), _) => NamedInput::topic(t),
+        (None, Some(f)) => NamedInput::file(&f.to_string_lossy()),
+        (None, None) => {
+            anyhow::bail!("validate --like needs --reference TOPIC or --reference-file FILE")
+        }
     };
-    let mut config = EvalConfig::new(
-        a.like.first().cloned(),
-        NamedInput::topic(reference),
-        vec![NamedInput::topic(estimate)],
-    );
+    let estimate = match (&a.estimate, &a.estimate_file) {
+        (Some(t), _) => NamedInput::topic(t),
+        (None, Some(f)) => NamedInput::file(&f.to_string_lossy()),
+        (None, None) => {
+            anyhow::bail!("validate --like needs --estimate TOPIC or --estimate-file FILE")
+        }
+    };
+    let mut config = EvalConfig::new(a.like.first().cloned(), reference, vec![estimate]);
     config.more_recordings = a.like.iter().skip(1).cloned().collect();
     config.keep_orientations = true;
     config.validate()?;
     let total: u64 = a
         .like
         .iter()
+        .chain(&a.reference_file)
+        .chain(&a.estimate_file)
         .map(|p| trajdrift::sources::open::input_size(p))
         .sum();
     let read = ReadProgress::new(total, false);
