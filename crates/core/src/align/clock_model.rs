@@ -42,6 +42,7 @@ pub const MAX_STEPS: usize = 3;
 /// of the windows' median σ over the mission's span added to σ_drift, kept the same false alarms and
 /// called twice as many 5-minute missions drifting with the wrong rate.
 pub const SLOW_ERROR_FACTOR: f64 = 2.0;
+
 /// The clock model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -110,7 +111,8 @@ pub struct ClockModel {
     pub drift_sigma_ppm: Option<f64>,
     /// The smallest drift declared on this profile, ppm: [`SLOW_ERROR_FACTOR`]·z·σ_drift with
     /// z = √(BIC margin + ln n) (what a linear model must gain to be chosen). Below it the model is
-    /// constant whatever the BIC says, and the constant's σ covers the drift it may hide.
+    /// constant whatever the BIC says (the pose fit's constant then has a σ that covers the drift it
+    /// may hide: `align::pose_model`).
     pub drift_resolution_ppm: Option<f64>,
     /// The segments (piecewise; empty otherwise).
     pub segments: Vec<ClockSegment>,

@@ -118,7 +118,7 @@ fn smoothed_at(t: &[f64], p: &[nalgebra::Vector3<f64>], at: f64, half_s: f64) ->
     [q.x, q.y]
 }
 
-/// The estimate's yaw turned between `a` and `b` (seconds, its clock from its first stamp), radians.
+/// The estimate's yaw turned between `a` and `b` (seconds from the reference's first stamp), radians.
 fn yaw_turned(t: &[f64], q: &[nalgebra::UnitQuaternion<f64>], a: f64, b: f64) -> f64 {
     let at = |x: f64| {
         let j = t.partition_point(|&s| s < x).min(t.len() - 1);
@@ -190,8 +190,10 @@ pub fn shape_of(reference: &Trajectory, estimate: &Trajectory) -> Option<Shape> 
     if reference.len() < 10 || estimate.len() < 10 {
         return None;
     }
+    // Both from the reference's first stamp: the estimate's turns in place are looked up at the
+    // reference's times (their clocks differ by the offset, a second or less, not by their starts).
     let rt = reference.times_s(reference.stamps_ns[0]);
-    let et = estimate.times_s(estimate.stamps_ns[0]);
+    let et = estimate.times_s(reference.stamps_ns[0]);
     let duration_s = rt[rt.len() - 1];
     if duration_s < 30.0 {
         return None;
