@@ -72,9 +72,8 @@ pub fn like_table(shape: &Shape, grades: &[MissionGrade]) -> String {
     );
     let refs: Vec<&MissionGrade> = grades.iter().collect();
     let c = calibration(&refs);
-    let mut sigma: Vec<f64> = grades.iter().filter_map(|g| g.sigma_s).collect();
-    sigma.sort_by(f64::total_cmp);
-    let median_sigma = sigma.get(sigma.len() / 2).copied().unwrap_or(f64::NAN);
+    let sigma: Vec<f64> = grades.iter().filter_map(|g| g.sigma_s).collect();
+    let median_sigma = crate::stats::median(&sigma).unwrap_or(f64::NAN);
     let _ = writeln!(
         out,
         "\n| missions | applied | |error| p50 / p90 / max ms | median σ ms | 2σ covers | median |error|/σ | clock alarms |"

@@ -126,6 +126,18 @@ pub struct ClockModel {
 }
 
 impl ClockModel {
+    /// A piecewise model's headline: its longest segment's offset and σ.
+    pub fn headline_from_longest_segment(&mut self) {
+        if let Some(s) = self
+            .segments
+            .iter()
+            .max_by(|a, b| (a.t_end - a.t_start).total_cmp(&(b.t_end - b.t_start)))
+        {
+            self.offset_s = s.offset_s;
+            self.sigma_s = s.sigma_s;
+        }
+    }
+
     /// Writes `reason` from the model's numbers and its criterion.
     pub fn describe(&mut self) {
         let why = &self.criterion;
@@ -449,14 +461,7 @@ fn fill(
         }
         OffsetModel::Piecewise => {
             model.segments = piecewise_segments(f.windows, f.splits, profile, signals);
-            if let Some(s) = model
-                .segments
-                .iter()
-                .max_by(|a, b| (a.t_end - a.t_start).total_cmp(&(b.t_end - b.t_start)))
-            {
-                model.offset_s = s.offset_s;
-                model.sigma_s = s.sigma_s;
-            }
+            model.headline_from_longest_segment();
         }
     }
 }

@@ -325,14 +325,7 @@ fn set_parameters(model: &mut ClockModel, last: &PoseFit, profile: &OffsetProfil
                     ..*s
                 };
             }
-            if let Some(s) = model
-                .segments
-                .iter()
-                .max_by(|a, b| (a.t_end - a.t_start).total_cmp(&(b.t_end - b.t_start)))
-            {
-                model.offset_s = s.offset_s;
-                model.sigma_s = s.sigma_s;
-            }
+            model.headline_from_longest_segment();
         }
     }
 }

@@ -33,6 +33,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::simulate::scenario::{Leg, MissionKind, Scenario};
+use crate::stats::median;
 use crate::trajectory::Trajectory;
 
 /// Length of a leg of the route, seconds.
@@ -65,23 +66,14 @@ pub struct Shape {
     pub legged: bool,
 }
 
-/// Median of a copy of `v` (NaN when empty).
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 /// Median sample rate of stamps `t` (seconds), Hz.
 fn rate_hz(t: &[f64]) -> f64 {
-    1.0 / median(
-        t.windows(2)
-            .map(|w| w[1] - w[0])
-            .filter(|d| *d > 0.0)
-            .collect(),
-    )
+    let periods: Vec<f64> = t
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d > 0.0)
+        .collect();
+    median(&periods).map_or(f64::NAN, |p| 1.0 / p)
 }
 
 /// White noise per coordinate from second differences (robust: 1.4826·MAD/√6), metres.
@@ -93,9 +85,11 @@ fn white_noise_m(p: &[nalgebra::Vector3<f64>]) -> f64 {
             [d.x, d.y, d.z]
         })
         .collect();
-    let m = median(second.clone());
-    let mad = median(second.iter().map(|x| (x - m).abs()).collect());
-    1.4826 * mad / 6f64.sqrt()
+    let Some(m) = median(&second) else {
+        return f64::NAN;
+    };
+    let deviations: Vec<f64> = second.iter().map(|x| (x - m).abs()).collect();
+    median(&deviations).map_or(f64::NAN, |mad| 1.4826 * mad / 6f64.sqrt())
 }
 
 /// The mean horizontal position of the samples within `half_s` of `t` (linear interpolation of the
@@ -205,13 +199,12 @@ pub fn shape_of(reference: &Trajectory, estimate: &Trajectory) -> Option<Shape> 
         &reference.positions,
         estimate.orientations.as_deref().map(|q| (et.as_slice(), q)),
     );
-    let moving_speed_mps = median(
-        route
-            .iter()
-            .filter(|l| l.speed_mps > 0.0)
-            .map(|l| l.speed_mps)
-            .collect(),
-    );
+    let moving: Vec<f64> = route
+        .iter()
+        .filter(|l| l.speed_mps > 0.0)
+        .map(|l| l.speed_mps)
+        .collect();
+    let moving_speed_mps = median(&moving).unwrap_or(f64::NAN);
     Some(Shape {
         duration_s,
         ref_rate_hz,
