@@ -9,7 +9,8 @@
 //! and builds on those results:
 //!
 //! - [`discover`]: which topics are sources, which is the reference, which file each came from;
-//! - [`pairs`]: the offset of every overlapping pair;
+//! - [`pairs`]: the offset of every overlapping pair, [`chain`]: measured through the reference's
+//!   clock;
 //! - [`coverage`]: rate, gaps and coverage of each source;
 //! - [`lever`]: each source's lever arm (a 3-D fit with Δt from its orientation, or lateral and
 //!   forward from positions);
@@ -24,6 +25,7 @@
 //!
 //! Layering: above `eval`, `annotate` (the copier `restamp` reuses), `plot` and `render`; below `batch`.
 
+pub mod chain;
 pub mod closure;
 pub mod coverage;
 pub mod discover;
@@ -39,6 +41,8 @@ pub mod table;
 
 use std::path::PathBuf;
 
+use rayon::prelude::*;
+
 use crate::clock::ClockCorrection;
 use crate::diag::{Warning, WarningCode};
 use crate::error::{Error, Result};
@@ -50,8 +54,8 @@ use crate::sources::Progress;
 use crate::trajectory::Trajectory;
 use discover::{discover, Discovered, SourceRequest};
 use report::{
-    AuditReport, Clock, OutOfLine, OutOfLineReason, PairOffset, SourceAudit, AUDIT_KIND,
-    AUDIT_SCHEMA_VERSION,
+    AuditReport, Clock, OutOfLine, OutOfLineReason, PairMeasurement, PairOffset, SourceAudit,
+    AUDIT_KIND, AUDIT_SCHEMA_VERSION,
 };
 
 /// What to audit.
@@ -111,8 +115,21 @@ pub fn audit(config: &AuditConfig, progress: Progress<'_>) -> Result<AuditOutcom
     sources.push(inputs.reference);
     sources.extend(inputs.estimates);
     absolute_crop(&mut eval.params, &sources[0].trajectory);
-    let evaluations = pairs::evaluate_pairs(&eval, &sources);
-    let report = build(config, &found, &sources, &evaluations, read_warnings)?;
+    // The reference's pairs first: every other pair is measured on their clocks, and so is each
+    // source's lever, the two side by side.
+    let mut evaluations = pairs::reference_pairs(&eval, &sources);
+    let clocks = reference_clocks(&sources, &evaluations, span_s(&sources[0].trajectory));
+    let (others, levers) = rayon::join(
+        || pairs::other_pairs(&eval, &sources, &evaluations),
+        || levers(&sources, &evaluations, &clocks),
+    );
+    evaluations.extend(others);
+    let measured = Measured {
+        evaluations,
+        clocks,
+        levers,
+    };
+    let report = build(config, &found, &sources, &measured, read_warnings)?;
     Ok(AuditOutcome {
         report,
         notes: found.notes,
@@ -211,9 +228,16 @@ fn pair_offsets(
             span_s(&sources[e.b].trajectory),
         );
         let span = (sa.0.max(sb.0), sa.1.min(sb.1));
-        let clock = match (e.a, &clocks[e.b]) {
-            (0, Some(c)) => c.clone(),
-            _ => Clock::from_time_offset(&r.time_offset, span),
+        let measured = Clock::from_time_offset(&r.time_offset, span);
+        let clock = match (e.a, &clocks[e.a], &clocks[e.b], e.measured) {
+            (0, _, Some(c), _) => c.clone(),
+            (_, Some(ca), Some(cb), PairMeasurement::ThroughReference) => {
+                match chain::chained(ca, cb, &measured, span) {
+                    Some(c) => c,
+                    None => continue,
+                }
+            }
+            _ => measured,
         };
         pair_clock[e.a][e.b] = Some(clock.clone());
         pair_list.push(PairOffset {
@@ -221,6 +245,7 @@ fn pair_offsets(
             b: sources[e.b].name.clone(),
             clock,
             overlap_s: e.overlap_s,
+            measured: e.measured,
         });
     }
     (pair_list, pair_clock)
@@ -310,27 +335,56 @@ fn lever_of(
     .or_else(|| Some(lever::positions_lever(e)))
 }
 
+/// Every source's lever arm (none for the reference), in parallel.
+fn levers(
+    sources: &[Loaded],
+    evaluations: &[pairs::PairEvaluation],
+    clocks: &[Option<Clock>],
+) -> Vec<Option<report::LeverFit>> {
+    (0..sources.len())
+        .into_par_iter()
+        .map(|i| {
+            let clock = clocks[i].as_ref()?;
+            let est = (i > 0).then(|| pair_report(evaluations, 0, i)).flatten();
+            lever_of(&sources[0].trajectory, &sources[i], clock, est)
+        })
+        .collect()
+}
+
+/// What the audit measured: every pair's evaluation, each source's clock against the reference
+/// (`None` where it has none) and its lever.
+struct Measured {
+    evaluations: Vec<pairs::PairEvaluation>,
+    clocks: Vec<Option<Clock>>,
+    levers: Vec<Option<report::LeverFit>>,
+}
+
 /// Source `i`'s line of the audit.
 fn source_audit(
     i: usize,
     sources: &[Loaded],
     found: &Discovered,
-    evaluations: &[pairs::PairEvaluation],
-    clock: Option<Clock>,
+    measured: &Measured,
     domain: String,
 ) -> SourceAudit {
     let s = &sources[i];
     let reference_span = span_s(&sources[0].trajectory);
-    let est = (i > 0).then(|| pair_report(evaluations, 0, i)).flatten();
-    let clock = clock.unwrap_or_else(|| Clock::reference(f64::NAN, f64::NAN));
+    let est = (i > 0)
+        .then(|| pair_report(&measured.evaluations, 0, i))
+        .flatten();
+    let clock = measured.clocks[i]
+        .clone()
+        .unwrap_or_else(|| Clock::reference(f64::NAN, f64::NAN));
     let correction = if i == 0 {
         ClockCorrection::Constant { dt_ns: 0 }
     } else {
         clock.correction()
     };
-    let lever = (i > 0)
-        .then(|| lever_of(&sources[0].trajectory, s, &clock, est))
-        .flatten();
+    let lever = if i == 0 {
+        None
+    } else {
+        measured.levers[i].clone()
+    };
     let de = est.and_then(|e| e.drift_error.first());
     SourceAudit {
         name: s.name.clone(),
@@ -365,13 +419,13 @@ fn build(
     config: &AuditConfig,
     found: &Discovered,
     sources: &[Loaded],
-    evaluations: &[pairs::PairEvaluation],
+    measured: &Measured,
     read_warnings: Vec<Warning>,
 ) -> Result<AuditReport> {
+    let (evaluations, clocks) = (&measured.evaluations, &measured.clocks);
     let evaluation = merged_evaluation(sources, evaluations, &read_warnings)?;
     let reference_span = span_s(&sources[0].trajectory);
-    let clocks = reference_clocks(sources, evaluations, reference_span);
-    let (pair_list, pair_clock) = pair_offsets(sources, evaluations, &clocks);
+    let (pair_list, pair_clock) = pair_offsets(sources, evaluations, clocks);
     let pair = |a: usize, b: usize| pair_clock[a.min(b)][a.max(b)].clone();
     let names: Vec<String> = sources.iter().map(|s| s.name.clone()).collect();
     let spans: Vec<(f64, f64)> = sources.iter().map(|s| span_s(&s.trajectory)).collect();
@@ -388,15 +442,12 @@ fn build(
         })
         .cloned()
         .collect();
-    let (mut out_of_line, missing) = clock_findings(sources, &clocks, evaluations);
+    let (mut out_of_line, missing) = clock_findings(sources, clocks, evaluations);
     warnings.extend(missing);
     out_of_line.extend(judged.out_of_line);
     warnings.extend(judged.warning);
     let source_list = (0..sources.len())
-        .map(|i| {
-            let domain = judged.domain_of[i].clone();
-            source_audit(i, sources, found, evaluations, clocks[i].clone(), domain)
-        })
+        .map(|i| source_audit(i, sources, found, measured, judged.domain_of[i].clone()))
         .collect();
     Ok(AuditReport {
         kind: AUDIT_KIND.into(),

@@ -5,13 +5,19 @@
 //! on the loaded trajectories: the offset search, its σ, the clock model), so whatever the evaluation
 //! knows about clocks — and every improvement to it — the audit knows too. The reference's pairs are
 //! evaluated with every metric asked (Drift Error, APE, …); the other pairs with the clock only.
-//! Pairs run in parallel; each holds a copy of its two trajectories while it runs.
+//! The reference's pairs run first; every other pair is then measured between its two sources'
+//! streams mapped onto the reference's clock, where their relative clock is a small constant
+//! residual ([`super::chain`]: what makes a drifting source against a stepping one measurable, and
+//! the search short). Pairs run in parallel; each holds a copy of its two trajectories while it
+//! runs.
 
 use rayon::prelude::*;
 
+use super::report::PairMeasurement;
+use crate::clock::ClockCorrection;
 use crate::eval::config::{EvalConfig, NamedInput, TrajectoryInput};
 use crate::eval::inputs::{Inputs, Loaded};
-use crate::report::json::{EstimateReport, Report};
+use crate::report::json::{EstimateReport, OffsetSource, Report, TimeOffsetStatus};
 
 /// The shortest overlap, seconds, on which a pair is evaluated.
 pub const MIN_OVERLAP_S: f64 = 10.0;
@@ -23,6 +29,9 @@ pub struct PairEvaluation {
     pub b: usize,
     /// Seconds both have data (on their own clocks).
     pub overlap_s: f64,
+    /// How it was measured: through the reference's clock, `result` is the residual of the two
+    /// sources' streams on it ([`super::chain`]), not their clock.
+    pub measured: PairMeasurement,
     pub result: Result<(EstimateReport, Report), String>,
 }
 
@@ -50,50 +59,147 @@ fn pair_config(base: &EvalConfig, a: &Loaded, b: &Loaded, clock_only: bool) -> E
     c
 }
 
-/// Evaluates every pair (i < j) of `sources` (the reference at index 0) whose spans overlap by
-/// [`MIN_OVERLAP_S`] or more.
-pub fn evaluate_pairs(base: &EvalConfig, sources: &[Loaded]) -> Vec<PairEvaluation> {
-    let mut pairs = Vec::new();
-    for a in 0..sources.len() {
-        for b in a + 1..sources.len() {
-            pairs.push((a, b));
+/// Evaluates the reference's pair with every other source (`sources[0]` the reference) whose span
+/// overlaps it by [`MIN_OVERLAP_S`] or more.
+pub fn reference_pairs(base: &EvalConfig, sources: &[Loaded]) -> Vec<PairEvaluation> {
+    (1..sources.len())
+        .into_par_iter()
+        .map(|b| evaluate_pair(base, sources, (0, b), None))
+        .collect()
+}
+
+/// Evaluates every other pair (1 ≤ i < j) that overlaps by [`MIN_OVERLAP_S`] or more, given the
+/// reference's pairs: through the reference's clock ([`super::chain`]) when both its sources have a
+/// confident clock against the reference, directly otherwise.
+pub fn other_pairs(
+    base: &EvalConfig,
+    sources: &[Loaded],
+    reference_pairs: &[PairEvaluation],
+) -> Vec<PairEvaluation> {
+    let n = sources.len();
+    // Each source's stamps on the reference's clock, where its clock against the reference is
+    // confident.
+    let mut on_reference: Vec<Option<Loaded>> = vec![None; n];
+    for e in reference_pairs {
+        if let Ok((r, _)) = &e.result {
+            if r.time_offset.status == TimeOffsetStatus::Ok {
+                let correction = ClockCorrection::from_report(&r.time_offset);
+                let mapped = correction.apply(&sources[e.b].trajectory);
+                on_reference[e.b] = Some(sources[e.b].with_trajectory(mapped));
+            }
         }
     }
-    pairs
+    let mut others = Vec::new();
+    for a in 1..n {
+        for b in a + 1..n {
+            others.push((a, b));
+        }
+    }
+    others
         .par_iter()
-        .map(|&(a, b)| {
-            let overlap = overlap_s(&sources[a], &sources[b]);
-            let result = if overlap < MIN_OVERLAP_S {
-                Err(format!(
-                    "{} and {} overlap {overlap:.1} s (less than {MIN_OVERLAP_S} s)",
-                    sources[a].name, sources[b].name
-                ))
-            } else {
-                let config = pair_config(base, &sources[a], &sources[b], a != 0);
-                let inputs = Inputs {
-                    reference: sources[a].clone(),
-                    estimates: vec![sources[b].clone()],
-                    warnings: Vec::new(),
-                    path: base
-                        .recording
-                        .as_ref()
-                        .map(|p| p.display().to_string())
-                        .unwrap_or_default(),
-                    bytes: 0,
-                };
-                crate::eval::evaluate_loaded(&config, inputs)
-                    .map_err(|e| e.to_string())
-                    .and_then(|(report, _)| match report.estimates.first() {
-                        Some(e) => Ok((e.clone(), report)),
-                        None => Err("no result".into()),
-                    })
-            };
-            PairEvaluation {
-                a,
-                b,
-                overlap_s: overlap,
-                result,
-            }
+        .map(|&(a, b)| match (&on_reference[a], &on_reference[b]) {
+            (Some(ca), Some(cb)) => evaluate_pair(base, sources, (a, b), Some((ca, cb))),
+            _ => evaluate_pair(base, sources, (a, b), None),
         })
         .collect()
+}
+
+/// B (`lb`) evaluated against A (`la`) with `config`.
+fn evaluate_one(
+    base: &EvalConfig,
+    config: &EvalConfig,
+    la: &Loaded,
+    lb: &Loaded,
+) -> Result<(EstimateReport, Report), String> {
+    let inputs = Inputs {
+        reference: la.clone(),
+        estimates: vec![lb.clone()],
+        warnings: Vec::new(),
+        path: base
+            .recording
+            .as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_default(),
+        bytes: 0,
+    };
+    crate::eval::evaluate_loaded(config, inputs)
+        .map_err(|e| e.to_string())
+        .and_then(|(report, _)| match report.estimates.first() {
+            Some(e) => Ok((e.clone(), report)),
+            None => Err("no result".into()),
+        })
+}
+
+/// The highest rate, Hz, of the reference role of a pair measured through the reference: its
+/// residual is wanted about as precisely as the sources' clocks against the reference, whose pose
+/// fits see windows of some 200 points (a 10 Hz total station or GNSS over 20 s); a 50 Hz odometry
+/// in that role would cost five times as much for a sharper closure than its chains can use.
+pub const CHAINED_MAX_RATE_HZ: f64 = 10.0;
+
+/// `l` with every k-th sample kept so that its median rate is at most `max_hz`; `None` when it is
+/// already.
+fn thinned(l: &Loaded, max_hz: f64) -> Option<Loaded> {
+    let period_s = super::coverage::median_period_s(&l.trajectory)?;
+    let k = (1.0 / (period_s * max_hz)).ceil();
+    if !(k.is_finite() && k >= 2.0) {
+        return None;
+    }
+    let k = k as usize;
+    let t = &l.trajectory;
+    let mut out = crate::trajectory::Trajectory::new(t.orientations.is_some());
+    for i in (0..t.len()).step_by(k) {
+        out.push(
+            t.stamps_ns[i],
+            t.positions[i],
+            t.orientations.as_ref().map(|q| q[i]),
+        );
+    }
+    Some(l.with_trajectory(out))
+}
+
+/// Pair (a, b) evaluated, on the stamps as read or on `chained` (both on the reference's clock).
+fn evaluate_pair(
+    base: &EvalConfig,
+    sources: &[Loaded],
+    (a, b): (usize, usize),
+    chained: Option<(&Loaded, &Loaded)>,
+) -> PairEvaluation {
+    let overlap = overlap_s(&sources[a], &sources[b]);
+    let result = if overlap < MIN_OVERLAP_S {
+        Err(format!(
+            "{} and {} overlap {overlap:.1} s (less than {MIN_OVERLAP_S} s)",
+            sources[a].name, sources[b].name
+        ))
+    } else {
+        // On one clock, the reference role thinned (the pose fit visits each of its samples).
+        let thin = chained.and_then(|(ca, _)| thinned(ca, CHAINED_MAX_RATE_HZ));
+        let (la, lb) = match chained {
+            Some((ca, cb)) => (thin.as_ref().unwrap_or(ca), cb),
+            None => (&sources[a], &sources[b]),
+        };
+        let mut config = pair_config(base, la, lb, a != 0);
+        // On one clock the residual is near 0: the pose fit starts there, without the searches;
+        // should it fail, the pair is searched like any other.
+        config.start_offset_s = chained.map(|_| 0.0);
+        let mut result = evaluate_one(base, &config, la, lb);
+        let fitted = |r: &Result<(EstimateReport, Report), String>| {
+            r.as_ref()
+                .is_ok_and(|(e, _)| e.time_offset.method == OffsetSource::Pose)
+        };
+        if config.start_offset_s.is_some() && !fitted(&result) {
+            config.start_offset_s = None;
+            result = evaluate_one(base, &config, la, lb);
+        }
+        result
+    };
+    PairEvaluation {
+        a,
+        b,
+        overlap_s: overlap,
+        measured: match chained {
+            Some(_) => PairMeasurement::ThroughReference,
+            None => PairMeasurement::Direct,
+        },
+        result,
+    }
 }

@@ -115,11 +115,12 @@ pub struct Clock {
     pub offset_s: f64,
     /// Its standard error, seconds: the evaluation's σ (what every χ² and 3σ test of the audit uses).
     pub sigma_s: Option<f64>,
-    /// Linear: the drift applied, ppm (> 0: the source's clock runs fast); and its σ.
+    /// Linear: the drift applied, ppm (> 0: the source's clock runs fast); and its σ. A pair's
+    /// piecewise clock measured through the reference may carry one too, common to its segments.
     pub drift_ppm: Option<f64>,
     #[serde(default)]
     pub drift_sigma_ppm: Option<f64>,
-    /// Linear: when Δt = `offset_s`, absolute seconds.
+    /// Linear (or a piecewise clock with a drift): when Δt = `offset_s`, absolute seconds.
     #[serde(default)]
     pub t_mid: Option<f64>,
     /// Constant: one segment over the overlap; piecewise: each segment; linear: none.
@@ -239,11 +240,17 @@ impl Clock {
             }
             OffsetModel::Piecewise => {
                 let n = self.segments.len();
+                // A pair's clock measured through the reference may add one drift to every
+                // segment ([`super::chain`]); the evaluation's piecewise clocks have none.
+                let drift = match (self.drift_ppm, self.t_mid) {
+                    (Some(d), Some(mid)) => -d * 1e-6 * (t - mid),
+                    _ => 0.0,
+                };
                 self.segments
                     .iter()
                     .enumerate()
                     .find(|(i, s)| (*i == 0 || t >= s.t_start) && (i + 1 == n || t < s.t_end))
-                    .map(|(_, s)| (s.offset_s, s.sigma_s))
+                    .map(|(_, s)| (s.offset_s + drift, s.sigma_s))
             }
         }
     }
@@ -329,6 +336,22 @@ pub struct PairOffset {
     pub clock: Clock,
     /// Seconds both have data.
     pub overlap_s: f64,
+    /// How the pair was measured.
+    #[serde(default)]
+    pub measured: PairMeasurement,
+}
+
+/// How a pair's clock was measured.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PairMeasurement {
+    /// B's stamps against A's as read (the reference's pairs, and a pair one of whose sources has no
+    /// confident clock against the reference).
+    #[default]
+    Direct,
+    /// Both sources' stamps mapped onto the reference's clock first, the residual between them
+    /// measured and the two clocks added back ([`super::chain`]).
+    ThroughReference,
 }
 
 /// The closure of a triple: Δt_AB + Δt_BC − Δt_AC, which is 0 when the three measurements agree.

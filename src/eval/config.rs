@@ -171,6 +171,10 @@ pub struct EvalConfig {
     /// Keep the estimates' orientations even when no metric reads them (an output that writes
     /// poses: the annotated recording). Not a user parameter: set by the command that writes.
     pub keep_orientations: bool,
+    /// Skip the signal searches and start the pose fit at this offset, seconds, when the estimate
+    /// has orientations. Not a user parameter: the audit sets it for a pair of sources already on
+    /// one clock ([`crate::audit::chain`]), whose offset is known to be near 0.
+    pub start_offset_s: Option<f64>,
 }
 
 impl EvalConfig {
@@ -192,6 +196,7 @@ impl EvalConfig {
             reference_lever: None,
             estimate_levers: Vec::new(),
             keep_orientations: false,
+            start_offset_s: None,
         }
     }
 

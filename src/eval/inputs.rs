@@ -27,6 +27,22 @@ pub struct Loaded {
     pub lever_m: Option<[f64; 3]>,
 }
 
+impl Loaded {
+    /// The same input holding `trajectory` instead (its stamps mapped, its samples thinned).
+    pub fn with_trajectory(&self, trajectory: Trajectory) -> Loaded {
+        Loaded {
+            name: self.name.clone(),
+            label: self.label.clone(),
+            type_name: self.type_name.clone(),
+            trajectory,
+            dropped_samples: self.dropped_samples,
+            rows: self.rows,
+            geodetic_origin: self.geodetic_origin,
+            lever_m: self.lever_m,
+        }
+    }
+}
+
 /// Everything an evaluation reads.
 #[derive(Debug, Clone)]
 pub struct Inputs {

@@ -376,6 +376,28 @@ fn searched_offset(
     let method = config.params.offset_method();
     let mut warnings = Vec::new();
     // `auto` runs every method; a named method runs alone (only what it needs is computed).
+    if let (Some(start), true) = (config.start_offset_s, est.trajectory.orientations.is_some()) {
+        let searched = Searched {
+            methods: Vec::new(),
+            reason: format!("started at {start:+.4} s, not searched"),
+            implied_lever: None,
+        };
+        let o = OffsetEstimate {
+            method: OffsetMethod::Speed,
+            offset_s: start,
+            correlation: f64::NAN,
+            confidence: f64::NAN,
+            status: OffsetStatus::Ok,
+            overlap_fraction: 1.0,
+            margin: f64::NAN,
+            rival_offset_s: None,
+            defined_fraction: 1.0,
+            sigma_s: None,
+        };
+        return Ok(accepted_offset(
+            config, &params, &pair, est, t0_ns, &o, searched,
+        ));
+    }
     let auto = if method == OffsetMethod::Auto {
         Some(match auto_time_offset_of(&pair, &params) {
             Ok(a) => a,

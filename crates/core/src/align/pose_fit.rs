@@ -163,6 +163,9 @@ struct At {
 /// Linear interpolation of the estimate's poses.
 struct Sampler<'a> {
     track: PoseTrack<'a>,
+    /// The track's orientations as rotation matrices, converted once (each point of every
+    /// iteration interpolates five poses, ten conversions otherwise).
+    rotations: Vec<Matrix3<f64>>,
     gap: f64,
 }
 
@@ -189,10 +192,7 @@ impl Sampler<'_> {
             return None;
         }
         let f = (t - ts[a]) / span;
-        let (ra, rb) = (
-            self.track.q[a].to_rotation_matrix().into_inner(),
-            self.track.q[b].to_rotation_matrix().into_inner(),
-        );
+        let (ra, rb) = (self.rotations[a], self.rotations[b]);
         Some(At {
             p: self.track.p[a] + (self.track.p[b] - self.track.p[a]) * f,
             r: ra + (rb - ra) * f,
@@ -777,6 +777,12 @@ impl<'a> PoseData<'a> {
             ref_p: self.ref_p,
             sampler: Sampler {
                 track: self.estimate,
+                rotations: self
+                    .estimate
+                    .q
+                    .iter()
+                    .map(|q| q.to_rotation_matrix().into_inner())
+                    .collect(),
                 gap: self.params.max_gap_s,
             },
             h: (2.0 * period).clamp(STENCIL_MIN_S, STENCIL_MAX_S),
