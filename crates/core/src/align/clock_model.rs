@@ -14,7 +14,9 @@
 //! **Steps** are found by binary segmentation (the split of a stretch that lowers its χ² most, kept
 //! while it lowers the BIC by [`BIC_MARGIN`]; at most [`MAX_STEPS`]); a segment spans at least two
 //! independent windows, so a position jump, which spoils a window or two, is not a step. The change
-//! time is then located on the signals themselves ([`locate_change`]), to a few seconds.
+//! time is then located on the data themselves, to a few seconds: on the positions when the pose fit
+//! made the profile ([`crate::align::pose_fit::locate_change`]), else on the signals
+//! ([`locate_change`]).
 //!
 //! Sign of the drift: `drift_ppm` is positive when the estimate's clock runs fast, so its Δt falls
 //! with time: Δt(t) = Δt(t_mid) − drift_ppm·10⁻⁶·(t − t_mid). The chosen model is applied to the
@@ -280,14 +282,18 @@ fn segment(w: &[ProfileWindow], min_len: usize, rho: f64, n_eff: f64) -> Vec<usi
     splits
 }
 
+/// Where a clock changes from Δt₁ to Δt₂ between two reference times: `locate((Δt₁, Δt₂), (lo, hi))`
+/// on the data themselves ([`locate_change`] on signals, [`crate::align::pose_fit::locate_change`] on
+/// positions); `None` when they cannot tell.
+pub type Locate<'a> = dyn Fn((f64, f64), (f64, f64)) -> Option<f64> + 'a;
+
 /// Chooses the model from `profile` (see the module doc). `whole` is the whole mission's Δt and its
-/// standard error (calibrated); `signals` the method's reference and estimate signals (estimate on its
-/// own clock), used to locate change times (`None`: between the windows). `forced`: the model to fit
-/// whatever the criterion says.
+/// standard error (calibrated); `locate` finds a change time between two windows (`None`: halfway
+/// between them). `forced`: the model to fit whatever the criterion says.
 pub fn choose_model(
     profile: &OffsetProfile,
     whole: (f64, f64),
-    signals: Option<(SignalView<'_>, SignalView<'_>)>,
+    locate: Option<&Locate<'_>>,
     forced: Option<OffsetModel>,
 ) -> ClockModel {
     let w = profile.usable();
@@ -348,7 +354,7 @@ pub fn choose_model(
             );
         }
     }
-    fill(&mut model, &fits, profile, signals);
+    fill(&mut model, &fits, profile, locate);
     model.describe();
     model
 }
@@ -449,7 +455,7 @@ fn fill(
     model: &mut ClockModel,
     f: &Fits<'_>,
     profile: &OffsetProfile,
-    signals: Option<(SignalView<'_>, SignalView<'_>)>,
+    locate: Option<&Locate<'_>>,
 ) {
     match model.model {
         OffsetModel::Constant => {}
@@ -460,7 +466,7 @@ fn fill(
             model.drift_ppm = Some(-l.b * 1e6);
         }
         OffsetModel::Piecewise => {
-            model.segments = piecewise_segments(f.windows, f.splits, profile, signals);
+            model.segments = piecewise_segments(f.windows, f.splits, profile, locate);
             model.headline_from_longest_segment();
         }
     }
@@ -473,13 +479,13 @@ fn bounds(splits: &[usize], n: usize) -> Vec<usize> {
     b
 }
 
-/// The segments of a piecewise model: change times located on the signals between the windows on
-/// either side of each split, each segment's Δt the weighted mean of the windows wholly inside it.
+/// The segments of a piecewise model: change times located on the data (`locate`) between the windows
+/// on either side of each split, each segment's Δt the weighted mean of the windows wholly inside it.
 fn piecewise_segments(
     w: &[ProfileWindow],
     splits: &[usize],
     profile: &OffsetProfile,
-    signals: Option<(SignalView<'_>, SignalView<'_>)>,
+    locate: Option<&Locate<'_>>,
 ) -> Vec<ClockSegment> {
     let half = 0.5 * profile.window_s;
     let rho = profile.redundancy();
@@ -492,8 +498,8 @@ fn piecewise_segments(
     for (k, &i) in splits.iter().enumerate() {
         let (lo, hi) = (w[i - 1].t - half, w[i].t + half);
         changes.push(
-            signals
-                .and_then(|re| locate_change(re, (means[k], means[k + 1]), (lo, hi)))
+            locate
+                .and_then(|l| l((means[k], means[k + 1]), (lo, hi)))
                 .unwrap_or(0.5 * (w[i - 1].t + w[i].t)),
         );
     }
@@ -625,6 +631,7 @@ pub fn clock_model_of(
         .sigma_s
         .map_or(SIGMA_FLOOR_S, |s| s * p.sigma_scale)
         .max(SIGMA_FLOOR_S);
-    let m = choose_model(&p, (whole.offset_s, whole_sigma), Some((r, e)), forced);
+    let locate = |d: (f64, f64), span: (f64, f64)| locate_change((r, e), d, span);
+    let m = choose_model(&p, (whole.offset_s, whole_sigma), Some(&locate), forced);
     Ok((p, m))
 }

@@ -249,6 +249,7 @@ struct Problem<'a> {
 
 /// One point of a window: reference position, the estimate's position ê, u = ê − R̂·D, ∂u/∂Δt
 /// over ±h (the instrument) and over ±h_w (for the Newton Jacobian), R̂, time.
+#[derive(Clone)]
 struct Pt {
     r: Vector3<f64>,
     e: Vector3<f64>,
@@ -821,6 +822,91 @@ impl<'a> PoseData<'a> {
             })
             .collect()
     }
+}
+
+/// How many times the change time and the two sides' similarities are refined in turn.
+const LOCATE_ROUNDS: usize = 3;
+
+/// The reference time τ in [lo, hi] at which the clock changes from Δt₁ to Δt₂ (`d`), located on
+/// the positions: τ minimises Σ_{t<τ} |e₁(t)|² + Σ_{t≥τ} |e₂(t)|², e_k the residual of the reference
+/// sample at t against the estimate at t − Δt_k (less its `lever_m`) mapped by a similarity fitted
+/// to the points on side k of τ, half a window beyond [lo, hi] included (scale held about `s_bar`
+/// like the windows'); τ and the two similarities in turn, from the middle. The positions see a step
+/// where speed signals cannot (a walking robot's speed hardly changes): the estimate is displaced
+/// by its velocity times the step, which no similarity of a side removes. `None` with fewer than
+/// [`MIN_WINDOW_SAMPLES`] points on a side.
+pub fn locate_change(
+    data: &PoseData<'_>,
+    lever_m: &Vector3<f64>,
+    s_bar: f64,
+    d: (f64, f64),
+    (lo, hi): (f64, f64),
+) -> Option<f64> {
+    let problem = data.problem();
+    let pad = 0.5 * data.params.window_s.unwrap_or(WINDOW_S);
+    let stretch = Window {
+        range: data.ref_t.partition_point(|&t| t < lo - pad)
+            ..data.ref_t.partition_point(|&t| t <= hi + pad),
+        t_start: lo - pad,
+        t_end: hi + pad,
+    };
+    // Each reference sample under both clocks (the samples where either cannot be interpolated
+    // dropped).
+    let under = |dt: f64| problem.points(&stretch, &ClockShape::Constant, &[dt], lever_m);
+    let (p1, p2) = (under(d.0), under(d.1));
+    let mut both: Vec<(Pt, Pt)> = Vec::with_capacity(p1.len());
+    let mut later = p2.into_iter().peekable();
+    for a in p1 {
+        while later.next_if(|b| b.t < a.t).is_some() {}
+        if let Some(b) = later.next_if(|b| b.t == a.t) {
+            both.push((a, b));
+        }
+    }
+    let mut tau = 0.5 * (lo + hi);
+    let mut located = None;
+    for _ in 0..LOCATE_ROUNDS {
+        let side = |before: bool| {
+            let pts: Vec<Pt> = both
+                .iter()
+                .filter(|(a, _)| (a.t < tau) == before)
+                .map(|(a, b)| if before { a.clone() } else { b.clone() })
+                .collect();
+            (pts.len() >= MIN_WINDOW_SAMPLES).then(|| {
+                let w = WindowPoints::new(pts);
+                let n = w.nuisance(s_bar);
+                (w, n)
+            })
+        };
+        let (Some((w1, n1)), Some((w2, n2))) = (side(true), side(false)) else {
+            return located;
+        };
+        let err = |w: &WindowPoints, n: &Nuisance, q: &Pt| {
+            (n.scale * (n.rot * (q.u - w.ubar_m)) + w.rbar_m - q.r).norm_squared()
+        };
+        // (time, cost before, cost after) of every sample in [lo, hi]: the split of least cost.
+        let costs: Vec<(f64, f64, f64)> = both
+            .iter()
+            .filter(|(a, _)| a.t >= lo && a.t <= hi)
+            .map(|(a, b)| (a.t, err(&w1, &n1, a), err(&w2, &n2, b)))
+            .collect();
+        let first = costs.first()?;
+        let mut after: f64 = costs.iter().map(|c| c.2).sum();
+        let mut before = 0.0;
+        let mut best = (after, first.0);
+        for c in &costs {
+            before += c.1;
+            after -= c.2;
+            if before + after < best.0 {
+                best = (before + after, c.0);
+            }
+        }
+        located = Some(best.1);
+        if best.1 == tau {
+            break;
+        }
+        tau = best.1;
+    }
+    located
 }
 
 /// Fits the clock `shape` (from `theta0`) and, when `with_lever`, the lever (from `lever0`) over
@@ -1475,6 +1561,74 @@ pub fn scatter_factor(w: &[(f64, f64, f64)]) -> f64 {
 mod tests {
     use super::*;
 
+    /// A simulated mission: the reference 10 Hz over 110 s, the estimate at 20 Hz stamped on its own
+    /// clock (`dt_at(t)` late, t true time), its sensor `lever` from the reference point, in a
+    /// rotated frame with a 2 % scale error; the body drives curves at `speed(t)`.
+    struct Sim {
+        ref_t: Vec<f64>,
+        ref_p: Vec<Vector3<f64>>,
+        t: Vec<f64>,
+        p: Vec<Vector3<f64>>,
+        q: Vec<UnitQuaternion<f64>>,
+    }
+
+    impl Sim {
+        fn new(dt_at: &dyn Fn(f64) -> f64, speed: &dyn Fn(f64) -> f64, lever: Vector3<f64>) -> Sim {
+            let yaw_at = |t: f64| 0.8 * (0.05 * t).sin() + 0.3 * (0.13 * t).cos();
+            // Integrate the body at 1 kHz.
+            let n = 120_000;
+            let mut pos = Vec::with_capacity(n);
+            let mut yaws = Vec::with_capacity(n);
+            let mut p = Vector3::zeros();
+            for i in 0..n {
+                let t = i as f64 * 0.001;
+                let yaw = yaw_at(t);
+                pos.push(p);
+                yaws.push(yaw);
+                p += Vector3::new(yaw.cos(), yaw.sin(), 0.0) * speed(t) * 0.001;
+            }
+            let at = |t: f64| {
+                let i = ((t * 1000.0) as usize).min(n - 1);
+                (pos[i], yaws[i])
+            };
+            let ref_t: Vec<f64> = (0..1100).map(|i| 1.0 + i as f64 * 0.1).collect();
+            let ref_p: Vec<Vector3<f64>> = ref_t.iter().map(|&t| at(t).0).collect();
+            let frame = UnitQuaternion::from_euler_angles(0.0, 0.0, 1.1);
+            let (mut et, mut ep, mut eq) = (Vec::new(), Vec::new(), Vec::new());
+            for i in 0..2300 {
+                let t_true = 0.5 + i as f64 * 0.05;
+                let (p, yaw) = at(t_true);
+                let r = UnitQuaternion::from_euler_angles(0.0, 0.0, yaw);
+                et.push(t_true - dt_at(t_true));
+                ep.push(frame * ((p + r * lever) * 1.02) + Vector3::new(5.0, -3.0, 1.0));
+                eq.push(frame * r);
+            }
+            Sim {
+                ref_t,
+                ref_p,
+                t: et,
+                p: ep,
+                q: eq,
+            }
+        }
+
+        fn data(&self) -> PoseData<'_> {
+            PoseData {
+                ref_t: &self.ref_t,
+                ref_p: &self.ref_p,
+                estimate: PoseTrack {
+                    t: &self.t,
+                    p: &self.p,
+                    q: &self.q,
+                },
+                params: PoseFitParams {
+                    max_gap_s: 1.0,
+                    window_s: None,
+                },
+            }
+        }
+    }
+
     /// A body driving curves with speed changes; the estimate 0.3 m ahead and 0.2 m above its
     /// reference point, in a rotated frame with a 2 % scale error and a known offset: the fit
     /// recovers the offset to well under a millisecond and the horizontal lever to a centimetre.
@@ -1482,52 +1636,8 @@ mod tests {
     fn recovers_offset_and_lever_on_a_noise_free_mission() {
         let dt_true = 0.137;
         let lever = Vector3::new(0.3, 0.0, 0.2);
-        let body = |t: f64| {
-            let v = 1.0 + 0.5 * (0.21 * t).sin();
-            let yaw = 0.8 * (0.05 * t).sin() + 0.3 * (0.13 * t).cos();
-            (v, yaw)
-        };
-        // Integrate the body at 1 kHz.
-        let n = 120_000;
-        let mut pos = Vec::with_capacity(n);
-        let mut yaws = Vec::with_capacity(n);
-        let mut p = Vector3::zeros();
-        for i in 0..n {
-            let t = i as f64 * 0.001;
-            let (v, yaw) = body(t);
-            pos.push(p);
-            yaws.push(yaw);
-            p += Vector3::new(yaw.cos(), yaw.sin(), 0.0) * v * 0.001;
-        }
-        let at = |t: f64| {
-            let i = ((t * 1000.0) as usize).min(n - 1);
-            (pos[i], yaws[i])
-        };
-        let ref_t: Vec<f64> = (0..1100).map(|i| 1.0 + i as f64 * 0.1).collect();
-        let ref_p: Vec<Vector3<f64>> = ref_t.iter().map(|&t| at(t).0).collect();
-        let frame = UnitQuaternion::from_euler_angles(0.0, 0.0, 1.1);
-        let (mut et, mut ep, mut eq) = (Vec::new(), Vec::new(), Vec::new());
-        for i in 0..2300 {
-            let t_true = 0.5 + i as f64 * 0.05;
-            let (p, yaw) = at(t_true);
-            let r = UnitQuaternion::from_euler_angles(0.0, 0.0, yaw);
-            et.push(t_true - dt_true);
-            ep.push(frame * ((p + r * lever) * 1.02) + Vector3::new(5.0, -3.0, 1.0));
-            eq.push(frame * r);
-        }
-        let data = PoseData {
-            ref_t: &ref_t,
-            ref_p: &ref_p,
-            estimate: PoseTrack {
-                t: &et,
-                p: &ep,
-                q: &eq,
-            },
-            params: PoseFitParams {
-                max_gap_s: 1.0,
-                window_s: None,
-            },
-        };
+        let sim = Sim::new(&|_| dt_true, &|t| 1.0 + 0.5 * (0.21 * t).sin(), lever);
+        let data = sim.data();
         let w = data.windows();
         let f = fit(
             &data,
@@ -1544,6 +1654,24 @@ mod tests {
         let want = Vector3::new(lever.x, lever.y, 0.0) * 1.02;
         assert!((f.lever_m - want).norm() < 0.01, "{:?}", f.lever_m);
         assert!(f.converged);
+    }
+
+    /// At a constant walking speed a clock step leaves the speed signals nothing to locate it by;
+    /// the positions do: the change time is found to a fraction of a second.
+    #[test]
+    fn locates_a_step_at_constant_speed() {
+        let lever = Vector3::new(0.3, 0.0, 0.2);
+        let dt = |t: f64| if t < 60.0 { 0.437 } else { 0.137 };
+        let sim = Sim::new(&dt, &|_| 0.5, lever);
+        let located = locate_change(
+            &sim.data(),
+            &(lever * 1.02),
+            1.02,
+            (0.437, 0.137),
+            (40.0, 80.0),
+        )
+        .unwrap();
+        assert!((located - 60.0).abs() < 0.5, "{located}");
     }
 
     #[test]

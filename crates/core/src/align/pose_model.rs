@@ -21,7 +21,9 @@
 
 use nalgebra::Vector3;
 
-use crate::align::clock_model::{choose_model, ClockModel, ClockSegment, OffsetModel};
+use crate::align::clock_model::{
+    choose_model, locate_change, ClockModel, ClockSegment, OffsetModel,
+};
 use crate::align::offset_profile::{OffsetProfile, ProfileParams, ProfileWindow};
 use crate::align::pose_fit::{self, ClockShape, PoseData, PoseFit};
 use crate::align::signals::SignalView;
@@ -204,7 +206,12 @@ impl Mission<'_> {
             Some(w) => (w.theta[0], w.theta_sigma[0].max(POSE_SIGMA_FLOOR_S)),
             None => (theta[0], f64::INFINITY),
         };
-        let model = choose_model(&profile, (offset0, whole_sigma), self.signals, self.forced);
+        // A step's time on the positions, else on the speed signals.
+        let locate = |d: (f64, f64), span: (f64, f64)| {
+            pose_fit::locate_change(self.data, &lever, scale.0, d, span)
+                .or_else(|| self.signals.and_then(|re| locate_change(re, d, span)))
+        };
+        let model = choose_model(&profile, (offset0, whole_sigma), Some(&locate), self.forced);
         let (next_shape, theta0) = shape_of(&model, offset0);
         let fit = match (&self.whole, model.model) {
             (Some(w), OffsetModel::Constant) => Some(w.clone()),
