@@ -27,7 +27,7 @@
 //! seconds apart) are given to their neighbours, and neighbours whose offsets agree within 3σ are
 //! merged; what remains decides the model.
 
-use super::closure::{MARGIN_S, MIN_PIECE_S};
+use super::closure::{bounds, MARGIN_S, MIN_PIECE_S};
 use super::report::Clock;
 use crate::align::clock_model::OffsetModel;
 use crate::report::json::{OffsetProfilePoint, OffsetSegmentReport};
@@ -69,17 +69,8 @@ pub fn chained(to_a: &Clock, to_b: &Clock, r: &Clock, span: (f64, f64)) -> Optio
             0.0
         }
     };
-    let mut cuts: Vec<f64> = [to_a, to_b, r]
-        .iter()
-        .flat_map(|c| c.breaks())
-        .filter(|t| *t > span.0 && *t < span.1)
-        .collect();
-    cuts.sort_by(f64::total_cmp);
-    let mut bounds = vec![span.0];
-    bounds.extend(cuts);
-    bounds.push(span.1);
     let mut segments = Vec::new();
-    for w in bounds.windows(2) {
+    for w in bounds(&[to_a, to_b, r], span).windows(2) {
         let t = 0.5 * (w[0] + w[1]);
         let (v, sigma_s) = value(t)?;
         segments.push(OffsetSegmentReport {
@@ -179,59 +170,18 @@ fn merge_same(segments: Vec<OffsetSegmentReport>) -> Vec<OffsetSegmentReport> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::audit::report::ClockMethod;
-    use crate::report::json::TimeOffsetStatus;
+    use crate::audit::report::examples;
 
     fn constant(offset_s: f64, sigma_s: f64) -> Clock {
-        Clock {
-            model: OffsetModel::Constant,
-            offset_s,
-            sigma_s: Some(sigma_s),
-            drift_ppm: None,
-            drift_sigma_ppm: None,
-            t_mid: None,
-            segments: vec![OffsetSegmentReport {
-                t_start: 0.0,
-                t_end: 1000.0,
-                offset_s,
-                sigma_s,
-            }],
-            status: TimeOffsetStatus::Ok,
-            method: ClockMethod::Pose,
-            profile: Vec::new(),
-        }
+        examples::constant(offset_s, sigma_s)
     }
 
     fn linear(offset_s: f64, drift_ppm: f64, t_mid: f64) -> Clock {
-        Clock {
-            model: OffsetModel::Linear,
-            drift_ppm: Some(drift_ppm),
-            drift_sigma_ppm: Some(0.1),
-            t_mid: Some(t_mid),
-            segments: Vec::new(),
-            ..constant(offset_s, 0.001)
-        }
+        examples::linear(offset_s, drift_ppm, t_mid, 0.001)
     }
 
     fn stepping(before: f64, after: f64, at: f64) -> Clock {
-        Clock {
-            model: OffsetModel::Piecewise,
-            segments: vec![
-                OffsetSegmentReport {
-                    t_start: 0.0,
-                    t_end: at,
-                    offset_s: before,
-                    sigma_s: 0.001,
-                },
-                OffsetSegmentReport {
-                    t_start: at,
-                    t_end: 1000.0,
-                    offset_s: after,
-                    sigma_s: 0.001,
-                },
-            ],
-            ..constant(after, 0.001)
-        }
+        examples::stepping(before, after, at, 0.001)
     }
 
     /// A drifting source against a stepping one: a step plus a drift, the value at every time the

@@ -43,10 +43,10 @@ pub struct ClosureStat {
     pub consistent: bool,
 }
 
-/// The closure of (A, B, C) from the clocks AB, BC and AC over `span` (absolute seconds, the three
-/// sources' common span). `None` when no piece is long enough or a σ is missing.
-pub fn closure(ab: &Clock, bc: &Clock, ac: &Clock, span: (f64, f64)) -> Option<ClosureStat> {
-    let mut cuts: Vec<f64> = [ab, bc, ac]
+/// `span`'s ends and, sorted between them, every change time of `clocks` inside it: the bounds of
+/// the pieces on which all of them are constant or linear.
+pub fn bounds(clocks: &[&Clock], span: (f64, f64)) -> Vec<f64> {
+    let mut cuts: Vec<f64> = clocks
         .iter()
         .flat_map(|c| c.breaks())
         .filter(|t| *t > span.0 && *t < span.1)
@@ -55,6 +55,13 @@ pub fn closure(ab: &Clock, bc: &Clock, ac: &Clock, span: (f64, f64)) -> Option<C
     let mut bounds = vec![span.0];
     bounds.extend(cuts);
     bounds.push(span.1);
+    bounds
+}
+
+/// The closure of (A, B, C) from the clocks AB, BC and AC over `span` (absolute seconds, the three
+/// sources' common span). `None` when no piece is long enough or a σ is missing.
+pub fn closure(ab: &Clock, bc: &Clock, ac: &Clock, span: (f64, f64)) -> Option<ClosureStat> {
+    let bounds = bounds(&[ab, bc, ac], span);
     let mut terms: Vec<(f64, f64)> = Vec::new();
     for (k, w) in bounds.windows(2).enumerate() {
         // The mission's own ends need no margin; a clock change does.
@@ -153,38 +160,7 @@ pub fn out_of_line(n_sources: usize, triples: &[([usize; 3], bool)]) -> Option<C
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::align::clock_model::OffsetModel;
-    use crate::report::json::{OffsetSegmentReport, TimeOffsetStatus};
-
-    fn constant(offset_s: f64, sigma_s: f64) -> Clock {
-        Clock {
-            model: OffsetModel::Constant,
-            offset_s,
-            sigma_s: Some(sigma_s),
-            drift_ppm: None,
-            drift_sigma_ppm: None,
-            t_mid: None,
-            segments: Vec::new(),
-            status: TimeOffsetStatus::Ok,
-            method: crate::audit::report::ClockMethod::Speed,
-            profile: Vec::new(),
-        }
-    }
-
-    fn stepping(before: f64, after: f64, at: f64, sigma_s: f64) -> Clock {
-        let seg = |t_start, t_end, offset_s| OffsetSegmentReport {
-            t_start,
-            t_end,
-            offset_s,
-            sigma_s,
-        };
-        Clock {
-            model: OffsetModel::Piecewise,
-            offset_s: after,
-            segments: vec![seg(0.0, at, before), seg(at, 1000.0, after)],
-            ..constant(after, sigma_s)
-        }
-    }
+    use crate::audit::report::examples::{constant, stepping};
 
     #[test]
     fn consistent_offsets_close_and_a_bad_one_does_not() {

@@ -82,15 +82,8 @@ mod tests {
     fn c(offset_s: f64, sigma_s: f64, model: OffsetModel) -> Clock {
         Clock {
             model,
-            offset_s,
-            sigma_s: Some(sigma_s),
-            drift_ppm: None,
-            drift_sigma_ppm: None,
-            t_mid: None,
-            segments: Vec::new(),
-            status: TimeOffsetStatus::Ok,
             method: crate::audit::report::ClockMethod::Speed,
-            profile: Vec::new(),
+            ..crate::audit::report::examples::constant(offset_s, sigma_s)
         }
     }
 

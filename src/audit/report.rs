@@ -404,3 +404,53 @@ pub struct OutOfLine {
     /// One sentence with the numbers.
     pub detail: String,
 }
+
+/// Clocks for the tests of the audit's judges (closure, chains, domains).
+#[cfg(test)]
+pub(crate) mod examples {
+    use super::{Clock, ClockMethod};
+    use crate::align::clock_model::OffsetModel;
+    use crate::report::json::{OffsetSegmentReport, TimeOffsetStatus};
+
+    /// A constant clock (no segments: a constant's value is its offset).
+    pub fn constant(offset_s: f64, sigma_s: f64) -> Clock {
+        Clock {
+            model: OffsetModel::Constant,
+            offset_s,
+            sigma_s: Some(sigma_s),
+            drift_ppm: None,
+            drift_sigma_ppm: None,
+            t_mid: None,
+            segments: Vec::new(),
+            status: TimeOffsetStatus::Ok,
+            method: ClockMethod::Pose,
+            profile: Vec::new(),
+        }
+    }
+
+    /// A clock stepping from `before` to `after` at `at` over [0, 1000] s.
+    pub fn stepping(before: f64, after: f64, at: f64, sigma_s: f64) -> Clock {
+        let seg = |t_start, t_end, offset_s| OffsetSegmentReport {
+            t_start,
+            t_end,
+            offset_s,
+            sigma_s,
+        };
+        Clock {
+            model: OffsetModel::Piecewise,
+            segments: vec![seg(0.0, at, before), seg(at, 1000.0, after)],
+            ..constant(after, sigma_s)
+        }
+    }
+
+    /// A clock drifting `drift_ppm` about `t_mid` (its drift's σ 0.1 ppm).
+    pub fn linear(offset_s: f64, drift_ppm: f64, t_mid: f64, sigma_s: f64) -> Clock {
+        Clock {
+            model: OffsetModel::Linear,
+            drift_ppm: Some(drift_ppm),
+            drift_sigma_ppm: Some(0.1),
+            t_mid: Some(t_mid),
+            ..constant(offset_s, sigma_s)
+        }
+    }
+}

@@ -574,10 +574,18 @@ pub fn locate_change(
     if pts.len() < 10 {
         return None;
     }
-    let total_after: f64 = pts.iter().map(|p| p.2).sum();
-    let (mut before, mut after) = (0.0, total_after);
-    let mut best = (after, pts[0].0);
-    for p in &pts {
+    least_cost_split(&pts)
+}
+
+/// Given (time, cost before, cost after) of each sample in time order, the time τ minimising
+/// Σ_{t ≤ τ} before + Σ_{t > τ} after (τ the first sample's time when every sample is better after);
+/// `None` without samples.
+pub fn least_cost_split(pts: &[(f64, f64, f64)]) -> Option<f64> {
+    let first = pts.first()?;
+    let mut after: f64 = pts.iter().map(|p| p.2).sum();
+    let mut before = 0.0;
+    let mut best = (after, first.0);
+    for p in pts {
         before += p.1;
         after -= p.2;
         if before + after < best.0 {

@@ -889,22 +889,12 @@ pub fn locate_change(
             .filter(|(a, _)| a.t >= lo && a.t <= hi)
             .map(|(a, b)| (a.t, err(&w1, &n1, a), err(&w2, &n2, b)))
             .collect();
-        let first = costs.first()?;
-        let mut after: f64 = costs.iter().map(|c| c.2).sum();
-        let mut before = 0.0;
-        let mut best = (after, first.0);
-        for c in &costs {
-            before += c.1;
-            after -= c.2;
-            if before + after < best.0 {
-                best = (before + after, c.0);
-            }
-        }
-        located = Some(best.1);
-        if best.1 == tau {
+        let split = crate::align::clock_model::least_cost_split(&costs)?;
+        located = Some(split);
+        if split == tau {
             break;
         }
-        tau = best.1;
+        tau = split;
     }
     located
 }
