@@ -68,7 +68,7 @@ fn long_mission() {
         Ok(r) => {
             let o = &r.estimates[0].time_offset;
             println!(
-                "speed: 2-hour mission ({:.0} s) {:8.1} s per eval (Δt {:+.4} s, model {:?}, drift {:?} ppm, measured {:?} ± {:?})",
+                "speed: 2-hour mission ({:.0} s) {:8.3} s per eval (Δt {:+.4} s, model {:?}, drift {:?} ppm, measured {:?} ± {:?})",
                 mission.duration_s,
                 start.elapsed().as_secs_f64(),
                 o.offset_s,
