@@ -173,7 +173,7 @@ pub struct EvalConfig {
     pub keep_orientations: bool,
     /// Skip the signal searches and start the pose fit at this offset, seconds, when the estimate
     /// has orientations. Not a user parameter: the audit sets it for a pair of sources already on
-    /// one clock ([`crate::audit::chain`]), whose offset is known to be near 0.
+    /// one clock (the audit's `chain` module), whose offset is known to be near 0.
     pub start_offset_s: Option<f64>,
 }
 
