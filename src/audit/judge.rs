@@ -1,7 +1,7 @@
 //! From the pairs' clocks to the audit's verdicts: the closure of every triple ([`super::closure`]),
 //! the source — or the pair — out of line, and the clock domains ([`super::domains`]). On plain data
 //! (names, spans, a pair clock per pair), so that an audit read back from its JSON can be judged again
-//! after one of its clocks is replaced ([`rejudge`]): what a curator does who knows better for one
+//! after one of its clocks is replaced (`rejudge`): what a curator does who knows better for one
 //! source, and what the tests do to check that a source given a wrong clock is named.
 
 use super::closure::{self, Culprit};

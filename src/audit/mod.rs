@@ -8,7 +8,7 @@
 //! ([`pairs`]: the offset search, σ, clock model — so the audit gets whatever the evaluation knows),
 //! and builds on those results:
 //!
-//! - [`discover`]: which topics are sources, which is the reference, which file each came from;
+//! - [`discover`](mod@discover): which topics are sources, which is the reference, which file each came from;
 //! - [`pairs`]: the offset of every overlapping pair, [`chain`]: measured through the reference's
 //!   clock;
 //! - [`coverage`]: rate, gaps and coverage of each source;
@@ -18,7 +18,7 @@
 //!   out of line;
 //! - [`domains`]: sources grouped by clock;
 //! - [`judge`]: closure, the source (or pair) out of line and the domains, from the pairs' clocks —
-//!   also on an audit read back and edited ([`judge::rejudge`]);
+//!   also on an audit read back and edited (`judge::rejudge`);
 //! - [`report`]: the result and its JSON (`schemas/audit.schema.json`), [`table`] and [`html`] its text
 //!   and page;
 //! - [`restamp_plan`] and [`restamp`]: which messages move by which clock, and the copy that moves them.

@@ -216,7 +216,7 @@ impl BlockCorrelator {
         acc
     }
 
-    /// Adds one block's sums: c[k] = Σ_i x[i]·y[i + k] = IFFT(conj(X)·Y)[k] for every product.
+    /// Adds one block's sums: `c[k] = Σ_i x[i]·y[i + k] = IFFT(conj(X)·Y)[k]` for every product.
     fn add_block(
         &self,
         (av, am): (&[f64], &[f64]),

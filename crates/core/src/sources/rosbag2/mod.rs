@@ -1,5 +1,5 @@
 //! rosbag2 folders (`metadata.yaml` plus one or several split files, storage `mcap` or `sqlite3`)
-//! as a [`Source`].
+//! as a [`Source`](crate::sources::Source).
 //!
 //! Channels come from `metadata.yaml` (one per topic, ids in its order, so they are the same in
 //! every split file); the files are read one after the other in one pass: MCAP files through the
