@@ -272,6 +272,17 @@ fn noise_bias() {
     }
 }
 
+/// `trajdrift validate ARGS`, which must succeed: its table.
+fn validate_table(args: &[&std::ffi::OsStr]) -> String {
+    let o = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
+        .arg("validate")
+        .args(args)
+        .output()
+        .expect("run trajdrift");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
 #[test]
 fn validate_like_reads_the_recording_s_shape_and_grades_missions_of_it() {
     let dir = std::env::temp_dir().join(format!("trajdrift-like-{}", std::process::id()));
@@ -281,20 +292,18 @@ fn validate_like_reads_the_recording_s_shape_and_grades_missions_of_it() {
         env!("CARGO_MANIFEST_DIR"),
         "/fixtures/sim_ground/mission.mcap"
     );
-    let o = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
-        .args(["validate", "--like", fixture])
-        .args([
-            "--reference",
-            "/reference/position",
-            "--estimate",
-            "/estimate/odom",
-        ])
-        .args(["--missions", "4", "--json"])
-        .arg(&json)
-        .output()
-        .expect("run trajdrift");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let table = String::from_utf8_lossy(&o.stdout);
+    let table = validate_table(&[
+        "--like".as_ref(),
+        fixture.as_ref(),
+        "--reference".as_ref(),
+        "/reference/position".as_ref(),
+        "--estimate".as_ref(),
+        "/estimate/odom".as_ref(),
+        "--missions".as_ref(),
+        "4".as_ref(),
+        "--json".as_ref(),
+        json.as_os_str(),
+    ]);
     assert!(table.contains("reference 10.0 Hz"), "{table}");
     assert!(table.contains("estimate 20.0 Hz"), "{table}");
     assert!(table.contains("| 4 | 4 |"), "{table}");
@@ -340,15 +349,15 @@ fn validate_like_takes_its_shape_from_text_trajectories_too() {
         return;
     };
     let dir = shared.join("fixtures").join("legged");
-    let o = Command::new(env!("CARGO_BIN_EXE_trajdrift"))
-        .args(["validate", "--missions", "2", "--reference-file"])
-        .arg(dir.join("reference.tum"))
-        .arg("--estimate-file")
-        .arg(dir.join("estimate.tum"))
-        .output()
-        .expect("run trajdrift");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let table = String::from_utf8_lossy(&o.stdout);
+    let (reference, estimate) = (dir.join("reference.tum"), dir.join("estimate.tum"));
+    let table = validate_table(&[
+        "--missions".as_ref(),
+        "2".as_ref(),
+        "--reference-file".as_ref(),
+        reference.as_os_str(),
+        "--estimate-file".as_ref(),
+        estimate.as_os_str(),
+    ]);
     assert!(table.contains("reference 20.0 Hz"), "{table}");
     assert!(table.contains("simulated as a legged robot"), "{table}");
     assert!(table.contains("| 2 | 2 |"), "{table}");
