@@ -12,8 +12,8 @@
 //! - [`pairs`]: the offset of every overlapping pair, [`chain`]: measured through the reference's
 //!   clock;
 //! - [`coverage`]: rate, gaps and coverage of each source;
-//! - [`lever`]: each source's lever arm (a 3-D fit with Δt from its orientation, or lateral and
-//!   forward from positions);
+//! - [`lever`]: each source's lever arm (the evaluation's pose fit from its orientation, or lateral
+//!   and forward from positions);
 //! - [`closure`]: Δt_AB + Δt_BC − Δt_AC of every triple with its σ and a χ² test, naming a source
 //!   out of line;
 //! - [`domains`]: sources grouped by clock;
@@ -40,8 +40,6 @@ pub mod restamp_plan;
 pub mod table;
 
 use std::path::PathBuf;
-
-use rayon::prelude::*;
 
 use crate::clock::ClockCorrection;
 use crate::diag::{Warning, WarningCode};
@@ -76,8 +74,8 @@ pub struct AuditOutcome {
     pub notes: Vec<String>,
 }
 
-/// The evaluation's request for every source at once (one pass), keeping orientations (the lever
-/// fit reads them).
+/// The evaluation's request for every source at once (one pass), keeping orientations (the pose
+/// fit and the lever's tilt test read them).
 fn eval_config(config: &AuditConfig, d: &Discovered) -> EvalConfig {
     let mut c = EvalConfig::new(
         config.recordings.first().cloned(),
@@ -115,15 +113,12 @@ pub fn audit(config: &AuditConfig, progress: Progress<'_>) -> Result<AuditOutcom
     sources.push(inputs.reference);
     sources.extend(inputs.estimates);
     absolute_crop(&mut eval.params, &sources[0].trajectory);
-    // The reference's pairs first: every other pair is measured on their clocks, and so is each
-    // source's lever, the two side by side.
+    // The reference's pairs first: every other pair is measured on their clocks; each source's
+    // lever is the one its pair with the reference fitted.
     let mut evaluations = pairs::reference_pairs(&eval, &sources);
     let clocks = reference_clocks(&sources, &evaluations, span_s(&sources[0].trajectory));
-    let (others, levers) = rayon::join(
-        || pairs::other_pairs(&eval, &sources, &evaluations),
-        || levers(&sources, &evaluations, &clocks),
-    );
-    evaluations.extend(others);
+    let levers = levers(&sources, &evaluations, &clocks);
+    evaluations.extend(pairs::other_pairs(&eval, &sources, &evaluations));
     let measured = Measured {
         evaluations,
         clocks,
@@ -313,40 +308,32 @@ fn clock_findings(
     (out_of_line, warnings)
 }
 
-/// A source's lever arm: the 3-D fit with Δt from its orientation where it has one and its clock is
-/// confident, else lateral and forward from positions; none for the reference or an unevaluated one.
+/// A source's lever arm: the evaluation's pose fit where the source has orientation and a confident
+/// clock, else lateral and forward from positions; none for the reference or an unevaluated one.
 fn lever_of(
-    reference: &Trajectory,
     source: &Loaded,
     clock: &Clock,
     est: Option<&EstimateReport>,
 ) -> Option<report::LeverFit> {
     let e = est?;
-    if source.trajectory.orientations.is_none() || clock.status != TimeOffsetStatus::Ok {
-        return Some(lever::positions_lever(e));
-    }
-    let (t0, t1) = clock_span(clock);
-    let offset = clock.at(0.5 * (t0 + t1)).map_or(clock.offset_s, |x| x.0);
-    lever::pose_fit(
-        reference,
-        &clock.correction().apply(&source.trajectory),
-        offset,
-    )
-    .or_else(|| Some(lever::positions_lever(e)))
+    let pose = match (&source.trajectory.orientations, clock.status) {
+        (Some(_), TimeOffsetStatus::Ok) => lever::pose_lever(&e.time_offset, &source.trajectory),
+        _ => None,
+    };
+    Some(pose.unwrap_or_else(|| lever::positions_lever(e)))
 }
 
-/// Every source's lever arm (none for the reference), in parallel.
+/// Every source's lever arm (none for the reference).
 fn levers(
     sources: &[Loaded],
     evaluations: &[pairs::PairEvaluation],
     clocks: &[Option<Clock>],
 ) -> Vec<Option<report::LeverFit>> {
     (0..sources.len())
-        .into_par_iter()
         .map(|i| {
             let clock = clocks[i].as_ref()?;
             let est = (i > 0).then(|| pair_report(evaluations, 0, i)).flatten();
-            lever_of(&sources[0].trajectory, &sources[i], clock, est)
+            lever_of(&sources[i], clock, est)
         })
         .collect()
 }
@@ -473,19 +460,4 @@ fn build(
         warnings,
         evaluation,
     })
-}
-
-/// The span a clock's segments cover (its first and last), absolute seconds.
-fn clock_span(c: &Clock) -> (f64, f64) {
-    match (c.segments.first(), c.segments.last()) {
-        (Some(a), Some(b)) => (a.t_start, b.t_end),
-        _ => {
-            let t = c
-                .profile
-                .first()
-                .zip(c.profile.last())
-                .map_or((0.0, 0.0), |(a, b)| (a.t, b.t));
-            t
-        }
-    }
 }

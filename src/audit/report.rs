@@ -297,8 +297,8 @@ impl From<OffsetSource> for ClockMethod {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum LeverMethod {
-    /// Least squares of the 3-D lever together with a Δt correction, from the source's orientation,
-    /// each window of the mission its own similarity to the reference's frame.
+    /// The evaluation's pose fit: the 3-D lever fitted together with Δt from the source's
+    /// orientation, each window of the mission its own yaw, scale and translation.
     PoseFit,
     /// From positions alone: lateral from the Drift Error's lever fit, forward from the lead of
     /// curvature over speed.

@@ -288,7 +288,8 @@ fn type_fits(v: &Value, t: &Value) -> bool {
 // ---- the tests ----------------------------------------------------------------------------------
 
 /// The project's own missions, three seeds of 20 minutes: each source's model is the truth's, the
-/// drift within 10 ppm, the step located within 15 s, every other clock on its own domain; each
+/// drift within 10 ppm, the step located within 15 s, every other clock on its own domain, the
+/// horizontal lever within 1 cm and the vertical one unknown (a planar path); each
 /// source's clock is exactly what `eval` reports for it; exit 3 (a clock is not constant).
 #[test]
 fn own_missions_models_domains_and_the_evaluations_clocks() {
@@ -308,6 +309,15 @@ fn own_missions_models_domains_and_the_evaluations_clocks() {
             if let Some(at) = e.step_s {
                 assert!(at.abs() <= 15.0, "{what}: {name} step {at} s off");
             }
+            // The lever: horizontal within 1 cm of the truth, the vertical unknown (the
+            // simulator's path is planar).
+            let lever = &source(&a, s["topic"].as_str().unwrap())["lever"];
+            assert_eq!(lever["method"], "pose-fit", "{what}: {name}");
+            for k in 0..2 {
+                let d = lever["lever_m"][k].as_f64().unwrap() - s["lever_m"][k].as_f64().unwrap();
+                assert!(d.abs() <= 0.01, "{what}: {name} lever[{k}] {d} m off");
+            }
+            assert!(lever["lever_m"][2].is_null(), "{what}: {name}");
         }
         // The same numbers as `eval` with every source as an estimate.
         let reference = truth["reference"].as_str().unwrap();

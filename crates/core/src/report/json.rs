@@ -221,6 +221,12 @@ pub struct TimeOffsetReport {
     pub fitted_lever_m: Option<[f64; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fitted_lever_sigma_m: Option<[f64; 3]>,
+    /// Whether the pose fit could tell a forward lever from Δt (false at a nearly constant speed,
+    /// where a sensor Δx ahead looks Δx/v early: Δt's variance grew beyond
+    /// [`crate::align::pose_fit::INSEPARABLE_VIF`] times when the lever was fitted). Absent when
+    /// the pose fit did not run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fitted_forward_separable: Option<bool>,
 }
 
 /// Whether the applied clock offset can be trusted.
