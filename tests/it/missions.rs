@@ -78,7 +78,17 @@ fn a_mission_in_many_bags_reports_what_one_merged_bag_reports() {
         "--estimate",
         "state=/anymal/state_estimator/odometry",
     ];
-    let cases: [(&str, Vec<&Path>, Vec<&str>); 4] = [
+    // Plain topics in three bags and no TF: the bags are read side by side, each on its own.
+    let side_by_side = [
+        "--reference",
+        "/boxi/ap20/prism_position",
+        "--estimate",
+        "/boxi/dlio/lidar_map_odometry",
+        "--estimate",
+        "/anymal/state_estimator/odometry",
+    ];
+    let cases: [(&str, Vec<&Path>, Vec<&str>); 5] = [
+        ("side_by_side", vec![split.as_path()], side_by_side.to_vec()),
         (
             "files",
             file_refs.clone(),

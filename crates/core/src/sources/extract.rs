@@ -199,6 +199,9 @@ pub fn extract(
     }
     let path = rec.path();
     let requests = Requests::of(topics, options)?;
+    if let Some(by_part) = side_by_side(rec, &requests, options) {
+        return extract_parts(rec.parts(), topics, &by_part, options, progress);
+    }
     // Fail fast on a wrong topic when an index lists the channels.
     if let Some(channels) = rec.known_channels() {
         check_requested(path, &requests.plain, &channels)?;
@@ -250,6 +253,121 @@ pub fn extract(
         warnings,
         static_transforms,
     })
+}
+
+/// Which part of a multi-file recording holds each requested topic, when the parts can be extracted
+/// each on its own, side by side: every part's channels are indexed, every requested topic lives in
+/// exactly one part with one readable type, no TF chain or static look-up needs edges from several
+/// files, and the geodetic topics (whose ENU origin is shared) are in one part or the origin is
+/// given. `None` otherwise: the parts are then read one after the other in one pass, which also
+/// words any error (a missing topic, a type differing between files).
+fn side_by_side(
+    rec: &dyn Recording,
+    requests: &Requests<'_>,
+    options: &ExtractOptions,
+) -> Option<Vec<usize>> {
+    let parts = rec.parts();
+    if parts.len() < 2 || !requests.lookup_frames.is_empty() {
+        return None;
+    }
+    let channels: Vec<Vec<ChannelInfo>> = parts
+        .iter()
+        .map(|p| p.known_channels())
+        .collect::<Option<_>>()?;
+    let mut by_part = Vec::with_capacity(requests.unique.len());
+    let mut geodetic_parts: Vec<usize> = Vec::new();
+    for topic in &requests.unique {
+        let holding: Vec<usize> = (0..parts.len())
+            .filter(|&i| channels[i].iter().any(|c| c.topic == *topic))
+            .collect();
+        let [part] = holding[..] else {
+            return None;
+        };
+        let on_topic: Vec<&ChannelInfo> = channels[part]
+            .iter()
+            .filter(|c| c.topic == *topic)
+            .collect();
+        let kinds: Vec<Option<MessageKind>> = on_topic
+            .iter()
+            .map(|c| channel_kind(c).map(|k| k.0))
+            .collect();
+        let kind = kinds.first().copied().flatten()?;
+        if kinds.iter().any(|k| *k != Some(kind)) {
+            return None;
+        }
+        if kind.is_geodetic() && !geodetic_parts.contains(&part) {
+            geodetic_parts.push(part);
+        }
+        by_part.push(part);
+    }
+    if geodetic_parts.len() > 1 && options.origin.is_none() {
+        return None;
+    }
+    Some(by_part)
+}
+
+/// [`extract`] of a multi-file recording whose requested topics each live in one part (`by_part`,
+/// per [`Requests::unique`] topic, from [`side_by_side`]): each part holding one is extracted on
+/// its own, in parallel — the same trajectories as one pass over the files in turn, read in the
+/// time of the largest. Memory: what each part's pass needs (one chunk at a time), plus the
+/// samples kept.
+fn extract_parts(
+    parts: &[Box<dyn Recording + Send + Sync>],
+    topics: &[String],
+    by_part: &[usize],
+    options: &ExtractOptions,
+    progress: Progress<'_>,
+) -> Result<Extraction> {
+    use rayon::prelude::*;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let unique: Vec<&str> = topics
+        .iter()
+        .map(String::as_str)
+        .fold(Vec::new(), |mut u, t| {
+            if !u.contains(&t) {
+                u.push(t);
+            }
+            u
+        });
+    let wanted: Vec<usize> = (0..parts.len()).filter(|i| by_part.contains(i)).collect();
+    // Bytes read so far, per part: progress is their sum.
+    let read: Vec<AtomicU64> = parts.iter().map(|_| AtomicU64::new(0)).collect();
+    let extractions: Vec<Extraction> = wanted
+        .par_iter()
+        .map(|&i| {
+            let own: Vec<String> = unique
+                .iter()
+                .zip(by_part)
+                .filter(|(_, &p)| p == i)
+                .map(|(t, _)| t.to_string())
+                .collect();
+            let report = |n: u64| {
+                read[i].store(n, Ordering::Relaxed);
+                progress(read.iter().map(|r| r.load(Ordering::Relaxed)).sum());
+            };
+            extract(parts[i].as_ref(), &own, options, &report)
+        })
+        .collect::<Result<_>>()?;
+    let mut out = Extraction::default();
+    let mut pool: Vec<ExtractedTopic> = Vec::new();
+    for e in extractions {
+        pool.extend(e.topics);
+        out.warnings.extend(e.warnings);
+    }
+    for t in topics {
+        // A topic requested twice is cloned from its first place.
+        let e = match pool.iter().position(|x| &x.topic == t) {
+            Some(k) => pool.swap_remove(k),
+            None => out
+                .topics
+                .iter()
+                .find(|x| &x.topic == t)
+                .cloned()
+                .ok_or_else(|| Error::InvalidArgument(format!("topic {t} was not extracted")))?,
+        };
+        out.topics.push(e);
+    }
+    Ok(out)
 }
 
 /// What one extraction asks for: TF chains, plain topics (each distinct one once, in `unique`), and

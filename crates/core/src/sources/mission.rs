@@ -7,7 +7,10 @@
 //! reads each file once, one after the other: memory is what one file's pass needs plus the samples
 //! kept. Files holding `/tf_static` are read first, so the TF tree's static part is known before the
 //! dynamic edges arrive (as a recorder that latches `/tf_static` at the start would have it). A topic
-//! with different types in two files is refused when it is read, naming both files.
+//! with different types in two files is refused when it is read, naming both files. An extraction
+//! whose topics each live in one file and that needs no TF reads the files holding them side by
+//! side instead, each on its own ([`Recording::parts`]; `crate::sources::extract`): the same
+//! trajectories in the time of the largest file.
 
 use std::cell::RefCell;
 use std::collections::HashMap;
@@ -98,11 +101,6 @@ impl Mission {
             parts,
             truncated: Mutex::new(None),
         })
-    }
-
-    /// The recordings, in reading order.
-    pub fn parts(&self) -> &[Part] {
-        &self.parts
     }
 
     /// [`Recording::pass`], telling `on_message` which file (its index in [`Mission::parts`]) each
@@ -241,6 +239,11 @@ impl Recording for Mission {
         on_message: OnMessage<'_>,
     ) -> Result<StreamOutcome> {
         self.pass_parts(select, progress, &mut |_, c, m| on_message(c, m))
+    }
+
+    /// The recordings, in reading order.
+    fn parts(&self) -> &[Part] {
+        &self.parts
     }
 
     fn truncation_warning(&self, offset: u64) -> Warning {

@@ -82,6 +82,11 @@ pub trait Recording {
         progress: Progress<'_>,
         on_message: OnMessage<'_>,
     ) -> Result<StreamOutcome>;
+    /// The recordings this one reads one after the other (a multi-file mission), empty for a single
+    /// recording: an extraction that needs nothing across them may read them side by side.
+    fn parts(&self) -> &[Box<dyn Recording + Send + Sync>] {
+        &[]
+    }
     /// The warning for a recording cut short at byte `offset`.
     fn truncation_warning(&self, offset: u64) -> Warning {
         Warning {
@@ -115,6 +120,9 @@ impl<R: Recording + ?Sized> Recording for Box<R> {
         on_message: OnMessage<'_>,
     ) -> Result<StreamOutcome> {
         (**self).pass(select, progress, on_message)
+    }
+    fn parts(&self) -> &[Box<dyn Recording + Send + Sync>] {
+        (**self).parts()
     }
     fn truncation_warning(&self, offset: u64) -> Warning {
         (**self).truncation_warning(offset)
