@@ -79,15 +79,20 @@ pub fn other_pairs(
     let n = sources.len();
     // Each source's stamps on the reference's clock, where its clock against the reference is
     // confident.
-    let mut on_reference: Vec<Option<Loaded>> = vec![None; n];
-    for e in reference_pairs {
-        if let Ok((r, _)) = &e.result {
-            if r.time_offset.status == TimeOffsetStatus::Ok {
+    let mapped: Vec<(usize, Loaded)> = reference_pairs
+        .par_iter()
+        .filter_map(|e| {
+            let (r, _) = e.result.as_ref().ok()?;
+            (r.time_offset.status == TimeOffsetStatus::Ok).then(|| {
                 let correction = ClockCorrection::from_report(&r.time_offset);
-                let mapped = correction.apply(&sources[e.b].trajectory);
-                on_reference[e.b] = Some(sources[e.b].with_trajectory(mapped));
-            }
-        }
+                let t = correction.apply(&sources[e.b].trajectory);
+                (e.b, sources[e.b].with_trajectory(t))
+            })
+        })
+        .collect();
+    let mut on_reference: Vec<Option<Loaded>> = vec![None; n];
+    for (b, l) in mapped {
+        on_reference[b] = Some(l);
     }
     let mut others = Vec::new();
     for a in 1..n {

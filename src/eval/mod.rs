@@ -664,16 +664,28 @@ fn pose_over_time(
 ) -> Option<(TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport)> {
     use crate::align::pose_model::pose_clock_model;
     let data = pose_data(params, pair, orientations);
-    // The speed signals locate a step's time (computed already by `auto`).
-    let speed =
-        crate::align::time_offset::prepared_signals(OffsetMethod::Speed, pair, params, o.offset_s)
-            .ok();
-    let views = speed.as_ref().map(speed_views);
+    // The speed signals locate a step's time when the positions do not (computed already by
+    // `auto`; otherwise only when asked).
+    let speed = std::cell::OnceCell::new();
+    let cell = &speed;
+    let signals = move || {
+        cell.get_or_init(|| {
+            crate::align::time_offset::prepared_signals(
+                OffsetMethod::Speed,
+                pair,
+                params,
+                o.offset_s,
+            )
+            .ok()
+        })
+        .as_ref()
+        .map(speed_views)
+    };
     let pc = pose_clock_model(
         &data,
         o.offset_s,
         &config.params.offset_profile(),
-        views,
+        &signals,
         config.params.forced_offset_model(),
     )?;
     let t0_s = t0_ns as f64 * 1e-9;

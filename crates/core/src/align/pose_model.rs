@@ -55,6 +55,10 @@ pub struct PoseClock {
     pub outlier_windows: usize,
 }
 
+/// The speed signals of the pair (reference, estimate), asked for only when a step's time is not
+/// found on the positions (so computed only then, when the caller has not computed them already).
+pub type Signals<'a> = &'a dyn Fn() -> Option<(SignalView<'a>, SignalView<'a>)>;
+
 /// The clock model of the mission in `data` from the pose fit, starting at `start_s` (the signal
 /// searches' answer); `None` when the fit cannot be made (too few windows, no convergence, or an
 /// answer farther than [`MAX_DISAGREEMENT_S`] from the start).
@@ -62,7 +66,7 @@ pub fn pose_clock_model(
     data: &PoseData<'_>,
     start_s: f64,
     profile_params: &ProfileParams,
-    signals: Option<(SignalView<'_>, SignalView<'_>)>,
+    signals: Signals<'_>,
     forced: Option<OffsetModel>,
 ) -> Option<PoseClock> {
     let data = PoseData {
@@ -124,12 +128,12 @@ fn whole_mission_fit(
 
 /// One mission's pose fits: the data, the windows of the fits and of the profile, the whole
 /// mission's constant fit, and what the model choice takes besides the profile.
-struct Mission<'a> {
+struct Mission<'a, 's> {
     data: &'a PoseData<'a>,
     windows: Vec<pose_fit::Window>,
     profile_windows: Vec<pose_fit::Window>,
     whole: Option<PoseFit>,
-    signals: Option<(SignalView<'a>, SignalView<'a>)>,
+    signals: Signals<'s>,
     forced: Option<OffsetModel>,
 }
 
@@ -145,7 +149,7 @@ struct Chosen {
     lever_m: Vector3<f64>,
 }
 
-impl Mission<'_> {
+impl Mission<'_, '_> {
     /// Steps 2 to 4: the profile, the model chosen from it and its fit. Measured from the whole
     /// mission's constant fit, or without one from `start_s` with no lever; measured again with
     /// the lever of the chosen model when that is not the constant, or when there was no constant
@@ -209,7 +213,7 @@ impl Mission<'_> {
         // A step's time on the positions, else on the speed signals.
         let locate = |d: (f64, f64), span: (f64, f64)| {
             pose_fit::locate_change(self.data, &lever, scale.0, d, span)
-                .or_else(|| self.signals.and_then(|re| locate_change(re, d, span)))
+                .or_else(|| (self.signals)().and_then(|re| locate_change(re, d, span)))
         };
         let model = choose_model(&profile, (offset0, whole_sigma), Some(&locate), self.forced);
         let (next_shape, theta0) = shape_of(&model, offset0);
