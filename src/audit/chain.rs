@@ -110,6 +110,7 @@ pub fn chained(to_a: &Clock, to_b: &Clock, r: &Clock, span: (f64, f64)) -> Optio
         drift_ppm: keep_drift.then_some(drift),
         drift_sigma_ppm: keep_drift.then_some(drift_sigma),
         t_mid: keep_drift.then_some(t_mid),
+        drift_resolution_ppm: None,
         segments: if model == OffsetModel::Linear {
             Vec::new()
         } else {

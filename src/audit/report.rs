@@ -123,6 +123,10 @@ pub struct Clock {
     /// Linear (or a piecewise clock with a drift): when Δt = `offset_s`, absolute seconds.
     #[serde(default)]
     pub t_mid: Option<f64>,
+    /// The least drift the windows tell from a constant clock, ppm: a `constant` clock may hide a
+    /// drift below it (its σ covers the part of the measured drift beyond its own noise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub drift_resolution_ppm: Option<f64>,
     /// Constant: one segment over the overlap; piecewise: each segment; linear: none.
     pub segments: Vec<OffsetSegmentReport>,
     /// `ok`, `weak` (nothing applied, `offset_s` is the weak peak) or `given`.
@@ -145,6 +149,7 @@ impl Clock {
             drift_ppm: None,
             drift_sigma_ppm: None,
             t_mid: None,
+            drift_resolution_ppm: None,
             segments: vec![OffsetSegmentReport {
                 t_start,
                 t_end,
@@ -177,6 +182,7 @@ impl Clock {
             drift_ppm: o.drift_ppm,
             drift_sigma_ppm: o.drift_sigma_ppm,
             t_mid: o.t_mid,
+            drift_resolution_ppm: o.drift_resolution_ppm,
             segments,
             status: o.status,
             method: o.method.into(),
@@ -421,6 +427,7 @@ pub(crate) mod examples {
             drift_ppm: None,
             drift_sigma_ppm: None,
             t_mid: None,
+            drift_resolution_ppm: None,
             segments: Vec::new(),
             status: TimeOffsetStatus::Ok,
             method: ClockMethod::Pose,

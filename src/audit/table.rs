@@ -16,7 +16,13 @@ pub fn describe_clock(c: &Clock, t0: f64) -> String {
     match (c.status, c.model) {
         (TimeOffsetStatus::Weak, _) => format!("weak (best {:+.4} s)", c.offset_s),
         (TimeOffsetStatus::Given, _) if c.method == ClockMethod::Reference => "reference".into(),
-        (_, OffsetModel::Constant) => format!("constant {:+.4} s{sigma}", c.offset_s),
+        (_, OffsetModel::Constant) => match c.drift_resolution_ppm {
+            Some(r) => format!(
+                "constant {:+.4} s{sigma} (drift resolution {r:.0} ppm)",
+                c.offset_s
+            ),
+            None => format!("constant {:+.4} s{sigma}", c.offset_s),
+        },
         (_, OffsetModel::Linear) => format!(
             "linear {:+.4} s{sigma} at {:.0} s, {:+.1} ppm",
             c.offset_s,

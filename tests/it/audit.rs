@@ -7,10 +7,10 @@
 //! evaluation's, the models are the truth's, the sources on other clocks are each their own domain,
 //! one file and its per-source folder give the same audit, a source given a wrong clock is named by the
 //! closure, `restamp` moves each domain by its model to the nanosecond and copies everything else
-//! byte for byte, and the real recordings raise no clock warning. The full accuracy bounds
-//! (each clock within the fidelity bounds, the domains exact, every consistent triple closing at 3σ)
-//! hang on the calibrated σ of the evaluation; [`full_acceptance_on_many_missions`] measures them and
-//! is run by hand (`cargo test --test it audit:: -- --ignored --nocapture`) until that σ has landed.
+//! byte for byte, and the real recordings raise no clock warning. The full accuracy bounds (each
+//! clock within the time alignment's bounds, the domains exact, every consistent triple closing at
+//! 3σ, on ten seeds and the independent mission) are [`full_acceptance_on_many_missions`]
+//! (`cargo test --test it audit::full_acceptance -- --nocapture` prints its table).
 
 use crate::common;
 
@@ -153,6 +153,23 @@ fn clock_error(a: &Value, truth: &Value, s: &Value) -> ClockError {
                 .fold(f64::INFINITY, |w, e| if e.abs() < w.abs() { e } else { w })
         }),
     }
+}
+
+/// For a drifting source audited `constant`: whether the resolution is stated, the true drift is
+/// below it, and the headline Δt is within 2σ of the truth at the middle of the clock's span
+/// (`None` when the source does not drift or its clock is not `constant`).
+fn below_resolution(src: &Value, s: &Value, truth: &Value) -> Option<bool> {
+    let c = &src["clock"];
+    let drift = s["drift_ppm"].as_f64().unwrap();
+    if drift == 0.0 || c["model"] != "constant" {
+        return None;
+    }
+    let seg = &c["segments"][0];
+    let mid = 0.5 * (seg["t_start"].as_f64()? + seg["t_end"].as_f64()?)
+        - truth["start_time_s"].as_f64().unwrap();
+    let error = c["offset_s"].as_f64()? - true_dt(s, mid);
+    let (sigma, resolution) = (c["sigma_s"].as_f64()?, c["drift_resolution_ppm"].as_f64());
+    Some(resolution.is_some_and(|r| drift.abs() < r) && error.abs() <= 2.0 * sigma)
 }
 
 /// Each truth source's audited model is the truth's kind: constant, linear (a drift) or piecewise (a
@@ -618,13 +635,13 @@ fn batch_audit_lists_each_missions_domains() {
     );
 }
 
-/// The accuracy acceptance, measured on ten seeds of the project's simulator and the
-/// independent mission (one file): each clock within the fidelity bounds (constant ≤ 10 ms, drift
-/// within 10 ppm, a step within 15 s and each segment within 20 ms), the domains exact, every triple
-/// closing. It hangs on the evaluation's σ (the domains' 3σ and the closure's χ²), which is being
-/// calibrated; it prints its table and fails where a bound does not hold.
+/// The audit's accuracy acceptance, measured on ten seeds of the project's simulator and the
+/// independent mission (one file): each clock within the time alignment's bounds (constant ≤ 10
+/// ms, drift within 10 ppm or, below the resolution, `constant` with the resolution stated and σ
+/// covering the headline's error — what `trajdrift validate` holds short drifts to — a step within
+/// 15 s and each segment within 20 ms), the domains exact, every triple closing. It hangs on the
+/// evaluation's σ (the domains' 3σ and the closure's χ²); `--nocapture` prints its table.
 #[test]
-#[ignore = "needs the calibrated time-offset σ; run with --ignored --nocapture for the table"]
 fn full_acceptance_on_many_missions() {
     let dir = tempfile::tempdir().unwrap();
     let mut cases: Vec<(String, Value, Value)> = Vec::new();
@@ -664,7 +681,18 @@ fn full_acceptance_on_many_missions() {
             let step_ok = e.step_s.is_none_or(|d| d.abs() <= 15.0);
             let domain_ok = (src["domain"] == reference_domain)
                 == s["shares_reference_clock"].as_bool().unwrap();
-            if e.worst_s.abs() > bound || !drift_ok || !step_ok || !domain_ok {
+            // A drift the windows cannot resolve (the fidelity issue's short drifts): `constant`
+            // with the resolution stated, the true drift below it, and the headline Δt within 2σ
+            // of the truth at the middle of the span (the drift's ends are then not bounded).
+            let unresolved_ok = match below_resolution(src, s, truth) {
+                Some(ok) => {
+                    println!("{what:12} {name:16} a drift below the resolution: {ok}");
+                    ok
+                }
+                None => false,
+            };
+            let clock_ok = (e.worst_s.abs() <= bound && drift_ok) || unresolved_ok;
+            if !clock_ok || !step_ok || !domain_ok {
                 failures.push(format!("{what}: {name}"));
             }
         }
