@@ -417,7 +417,7 @@ fn build(
     let names: Vec<String> = sources.iter().map(|s| s.name.clone()).collect();
     let spans: Vec<(f64, f64)> = sources.iter().map(|s| span_s(&s.trajectory)).collect();
     let judged = judge::judge(&names, &spans, &pair, reference_span);
-    // The evaluation's lever warnings are the audit's lever fit's business.
+    // The evaluation's lever warnings are the audit's lever report's business.
     let mut warnings: Vec<Warning> = evaluation
         .warnings
         .iter()

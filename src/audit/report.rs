@@ -304,7 +304,7 @@ impl From<OffsetSource> for ClockMethod {
 #[serde(rename_all = "kebab-case")]
 pub enum LeverMethod {
     /// The evaluation's pose fit: the 3-D lever fitted together with Δt from the source's
-    /// orientation, each window of the mission its own yaw, scale and translation.
+    /// orientation, each window of the mission its own similarity to the reference's frame.
     PoseFit,
     /// From positions alone: lateral from the Drift Error's lever fit, forward from the lead of
     /// curvature over speed.

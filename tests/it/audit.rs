@@ -681,7 +681,7 @@ fn full_acceptance_on_many_missions() {
             let step_ok = e.step_s.is_none_or(|d| d.abs() <= 15.0);
             let domain_ok = (src["domain"] == reference_domain)
                 == s["shares_reference_clock"].as_bool().unwrap();
-            // A drift the windows cannot resolve (the fidelity issue's short drifts): `constant`
+            // A drift the windows cannot resolve (short drifts, as `trajdrift validate` grades them): `constant`
             // with the resolution stated, the true drift below it, and the headline Δt within 2σ
             // of the truth at the middle of the span (the drift's ends are then not bounded).
             let unresolved_ok = match below_resolution(src, s, truth) {

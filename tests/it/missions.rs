@@ -78,7 +78,8 @@ fn a_mission_in_many_bags_reports_what_one_merged_bag_reports() {
         "--estimate",
         "state=/anymal/state_estimator/odometry",
     ];
-    // Plain topics in three bags and no TF: the bags are read side by side, each on its own.
+    // Plain topics in three bags and no TF: the bags are read side by side, each on its own (one
+    // topic asked for twice).
     let side_by_side = [
         "--reference",
         "/boxi/ap20/prism_position",
@@ -86,6 +87,8 @@ fn a_mission_in_many_bags_reports_what_one_merged_bag_reports() {
         "/boxi/dlio/lidar_map_odometry",
         "--estimate",
         "/anymal/state_estimator/odometry",
+        "--estimate",
+        "again=/boxi/dlio/lidar_map_odometry",
     ];
     let cases: [(&str, Vec<&Path>, Vec<&str>); 5] = [
         ("side_by_side", vec![split.as_path()], side_by_side.to_vec()),

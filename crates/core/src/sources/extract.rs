@@ -200,7 +200,13 @@ pub fn extract(
     let path = rec.path();
     let requests = Requests::of(topics, options)?;
     if let Some(by_part) = side_by_side(rec, &requests, options) {
-        return extract_parts(rec.parts(), topics, &by_part, options, progress);
+        return extract_parts(
+            rec.parts(),
+            (topics, &requests.unique),
+            &by_part,
+            options,
+            progress,
+        );
     }
     // Fail fast on a wrong topic when an index lists the channels.
     if let Some(channels) = rec.known_channels() {
@@ -307,32 +313,28 @@ fn side_by_side(
 }
 
 /// [`extract`] of a multi-file recording whose requested topics each live in one part (`by_part`,
-/// per [`Requests::unique`] topic, from [`side_by_side`]): each part holding one is extracted on
-/// its own, in parallel — the same trajectories as one pass over the files in turn, read in the
-/// time of the largest. Memory: what each part's pass needs (one chunk at a time), plus the
-/// samples kept.
+/// per `unique` topic, from [`side_by_side`]): each part holding one is extracted on its own, in
+/// parallel — the same trajectories as one pass over the files in turn, read in the time of the
+/// largest. Memory: what each part's pass needs (one chunk at a time), plus the samples kept.
 fn extract_parts(
     parts: &[Box<dyn Recording + Send + Sync>],
-    topics: &[String],
+    (topics, unique): (&[String], &[&str]),
     by_part: &[usize],
     options: &ExtractOptions,
     progress: Progress<'_>,
 ) -> Result<Extraction> {
     use rayon::prelude::*;
     use std::sync::atomic::{AtomicU64, Ordering};
-    let unique: Vec<&str> = topics
-        .iter()
-        .map(String::as_str)
-        .fold(Vec::new(), |mut u, t| {
-            if !u.contains(&t) {
-                u.push(t);
-            }
-            u
-        });
     let wanted: Vec<usize> = (0..parts.len()).filter(|i| by_part.contains(i)).collect();
-    // Bytes read so far, per part: progress is their sum.
+    // Bytes read so far, per part; progress is their sum, never shown going back.
     let read: Vec<AtomicU64> = parts.iter().map(|_| AtomicU64::new(0)).collect();
-    let extractions: Vec<Extraction> = wanted
+    let shown = AtomicU64::new(0);
+    let show = |n: u64| {
+        if shown.fetch_max(n, Ordering::Relaxed) < n {
+            progress(n);
+        }
+    };
+    let extractions: Vec<(usize, Extraction)> = wanted
         .par_iter()
         .map(|&i| {
             let own: Vec<String> = unique
@@ -343,31 +345,38 @@ fn extract_parts(
                 .collect();
             let report = |n: u64| {
                 read[i].store(n, Ordering::Relaxed);
-                progress(read.iter().map(|r| r.load(Ordering::Relaxed)).sum());
+                show(read.iter().map(|r| r.load(Ordering::Relaxed)).sum());
             };
-            extract(parts[i].as_ref(), &own, options, &report)
+            Ok((i, extract(parts[i].as_ref(), &own, options, &report)?))
         })
         .collect::<Result<_>>()?;
-    let mut out = Extraction::default();
-    let mut pool: Vec<ExtractedTopic> = Vec::new();
-    for e in extractions {
-        pool.extend(e.topics);
-        out.warnings.extend(e.warnings);
-    }
-    for t in topics {
-        // A topic requested twice is cloned from its first place.
-        let e = match pool.iter().position(|x| &x.topic == t) {
-            Some(k) => pool.swap_remove(k),
-            None => out
-                .topics
+    // The files holding no requested topic count as read (they need not be).
+    show(parts.iter().map(|p| p.recording_size()).sum());
+    let mut warnings = Vec::new();
+    let mut pool: Vec<Option<ExtractedTopic>> = unique.iter().map(|_| None).collect();
+    for (i, e) in extractions {
+        warnings.extend(e.warnings);
+        for t in e.topics {
+            if let Some(k) = unique
                 .iter()
-                .find(|x| &x.topic == t)
-                .cloned()
-                .ok_or_else(|| Error::InvalidArgument(format!("topic {t} was not extracted")))?,
-        };
-        out.topics.push(e);
+                .zip(by_part)
+                .position(|(u, &p)| *u == t.topic && p == i)
+            {
+                pool[k] = Some(t);
+            }
+        }
     }
-    Ok(out)
+    let plain: Vec<ExtractedTopic> = pool.into_iter().flatten().collect();
+    if plain.len() != unique.len() {
+        return Err(Error::InvalidArgument(
+            "internal: a topic read side by side from a mission's files went missing; please report it with the command that gave it".into(),
+        ));
+    }
+    Ok(Extraction {
+        topics: in_request_order(topics, unique, plain, &[]),
+        warnings,
+        static_transforms: Vec::new(),
+    })
 }
 
 /// What one extraction asks for: TF chains, plain topics (each distinct one once, in `unique`), and

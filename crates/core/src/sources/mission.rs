@@ -10,7 +10,7 @@
 //! with different types in two files is refused when it is read, naming both files. An extraction
 //! whose topics each live in one file and that needs no TF reads the files holding them side by
 //! side instead, each on its own ([`Recording::parts`]; `crate::sources::extract`): the same
-//! trajectories in the time of the largest file.
+//! trajectories in the time of the largest file, memory one pass's per file being read.
 
 use std::cell::RefCell;
 use std::collections::HashMap;
