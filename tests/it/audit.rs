@@ -639,7 +639,8 @@ fn batch_audit_lists_each_missions_domains() {
 /// independent mission (one file): each clock within the time alignment's bounds (constant ≤ 10
 /// ms, drift within 10 ppm or, below the resolution, `constant` with the resolution stated and σ
 /// covering the headline's error — what `trajdrift validate` holds short drifts to — a step within
-/// 15 s and each segment within 20 ms), the domains exact, every triple closing. It hangs on the
+/// 15 s and each segment within 20 ms), the horizontal lever within 1 cm where stated, the domains
+/// exact, every triple closing. It hangs on the
 /// evaluation's σ (the domains' 3σ and the closure's χ²); `--nocapture` prints its table.
 #[test]
 fn full_acceptance_on_many_missions() {
@@ -694,6 +695,16 @@ fn full_acceptance_on_many_missions() {
             let clock_ok = (e.worst_s.abs() <= bound && drift_ok) || unresolved_ok;
             if !clock_ok || !step_ok || !domain_ok {
                 failures.push(format!("{what}: {name}"));
+            }
+            // The horizontal lever, where stated: within 1 cm of the truth.
+            let lever = &src["lever"]["lever_m"];
+            let off_mm: Vec<f64> = (0..2)
+                .filter_map(|k| Some(lever[k].as_f64()? - s["lever_m"][k].as_f64()?))
+                .map(|d| d * 1e3)
+                .collect();
+            println!("{what:12} {name:16} lever x, y off by {off_mm:+.1?} mm");
+            if off_mm.iter().any(|d| d.abs() > 10.0) {
+                failures.push(format!("{what}: {name} lever"));
             }
         }
         let open: Vec<_> = a["closure"]
