@@ -243,11 +243,37 @@ fn fit(w: &[ProfileWindow], t0: f64, linear: bool, rho: f64) -> Option<Fit> {
     })
 }
 
+/// z = √(BIC margin + ln n) over `n_eff` independent windows: how many σ a drift or a step must
+/// reach to lower the BIC by [`BIC_MARGIN`].
+fn criterion_z(n_eff: f64) -> f64 {
+    (BIC_MARGIN + n_eff.max(1.0).ln()).sqrt()
+}
+
+impl Fit {
+    /// σ of the constant, raised by the windows' scatter about it where that exceeds their σ (the
+    /// Birge ratio over `len` windows).
+    fn scattered_sigma_a(&self, len: usize) -> f64 {
+        let dof = (len as f64 - 1.0).max(1.0);
+        self.sigma_a * (self.chi2 / dof).sqrt().max(1.0)
+    }
+}
+
 /// Splits of `w` into constant stretches by binary segmentation; returns the split indices (a split
-/// at i: windows ..i and i.. differ).
-fn segment(w: &[ProfileWindow], min_len: usize, rho: f64, n_eff: f64) -> Vec<usize> {
+/// at i: windows ..i and i.. differ). A split is a step only when its two sides' offsets differ by
+/// the step resolution, [`SLOW_ERROR_FACTOR`]·z·σ of the difference (each side's σ raised by its
+/// own windows' scatter): the same rule as a drift's, for the same reason — an error that wanders
+/// slowly across the mission (a forward lever trading against Δt as the gait or the path changes)
+/// moves neighbouring windows together, which their σ cannot show. On the validation's
+/// position-jump missions (seeds 1000, 2000, 3000), once the jumps no longer spoiled the windows,
+/// the BIC alone called three constant clocks stepping by 5, 23 and 60 ms; the steps of the step
+/// missions are 0.1–1 s. A [`Steps::Provisional`] profile proposes steps on the BIC alone.
+fn segment(w: &[ProfileWindow], min_len: usize, rho: f64, n_eff: f64, steps: Steps) -> Vec<usize> {
     let mut splits: Vec<usize> = Vec::new();
     let penalty = 2.0 * n_eff.max(1.0).ln();
+    let floor = match steps {
+        Steps::Provisional => 0.0,
+        Steps::Resolved => SLOW_ERROR_FACTOR * criterion_z(n_eff),
+    };
     for _ in 0..MAX_STEPS {
         let mut bounds = vec![0];
         bounds.extend(&splits);
@@ -266,6 +292,12 @@ fn segment(w: &[ProfileWindow], min_len: usize, rho: f64, n_eff: f64) -> Vec<usi
                     continue;
                 };
                 let gain = (whole.chi2 - l.chi2 - r.chi2) / rho;
+                let sigma = l
+                    .scattered_sigma_a(i - lo)
+                    .hypot(r.scattered_sigma_a(hi - i));
+                if (l.a - r.a).abs() < floor * sigma {
+                    continue;
+                }
                 if best.is_none_or(|(g, _)| gain > g) {
                     best = Some((gain, i));
                 }
@@ -282,6 +314,17 @@ fn segment(w: &[ProfileWindow], min_len: usize, rho: f64, n_eff: f64) -> Vec<usi
     splits
 }
 
+/// How the steps of a profile are judged.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Steps {
+    /// On the BIC alone: the profile is a first look, to be measured again under the model it
+    /// proposes (its windows beyond a large step were searched from the wrong offset and scatter;
+    /// a step of 0.8 s came out of one as 0.36 s, 4.5σ).
+    Provisional,
+    /// On the BIC and the step resolution (see `segment`).
+    Resolved,
+}
+
 /// Where a clock changes from Δt₁ to Δt₂ between two reference times: `locate((Δt₁, Δt₂), (lo, hi))`
 /// on the data themselves ([`locate_change`] on signals, [`crate::align::pose_fit::locate_change`] on
 /// positions); `None` when they cannot tell.
@@ -295,6 +338,7 @@ pub fn choose_model(
     whole: (f64, f64),
     locate: Option<&Locate<'_>>,
     forced: Option<OffsetModel>,
+    steps: Steps,
 ) -> ClockModel {
     let w = profile.usable();
     let rho = profile.redundancy();
@@ -309,7 +353,7 @@ pub fn choose_model(
     };
     let t_mid = 0.5 * (w[0].t + w[w.len() - 1].t);
     let min_len = (2.0 * rho).ceil() as usize;
-    let splits = segment(&w, min_len, rho, n_eff);
+    let splits = segment(&w, min_len, rho, n_eff, steps);
     let fits = Fits {
         constant: c,
         linear: fit(&w, t_mid, true, rho),
@@ -323,7 +367,7 @@ pub fn choose_model(
         window_s: profile.window_s,
     };
     let drift = fits.drift_ppm(rho);
-    let z = (BIC_MARGIN + n_eff.max(1.0).ln()).sqrt();
+    let z = criterion_z(n_eff);
     let resolution = drift.map(|d| SLOW_ERROR_FACTOR * z * d.1);
     let chosen = match (forced, criterion.choice(), drift, resolution) {
         (Some(f), ..) => f,
@@ -640,6 +684,12 @@ pub fn clock_model_of(
         .map_or(SIGMA_FLOOR_S, |s| s * p.sigma_scale)
         .max(SIGMA_FLOOR_S);
     let locate = |d: (f64, f64), span: (f64, f64)| locate_change((r, e), d, span);
-    let m = choose_model(&p, (whole.offset_s, whole_sigma), Some(&locate), forced);
+    let m = choose_model(
+        &p,
+        (whole.offset_s, whole_sigma),
+        Some(&locate),
+        forced,
+        Steps::Resolved,
+    );
     Ok((p, m))
 }

@@ -167,6 +167,9 @@ struct Sampler<'a> {
     /// iteration interpolates five poses, ten conversions otherwise).
     rotations: Vec<Matrix3<f64>>,
     gap: f64,
+    /// Where the estimate jumps ([`crate::align::jumps`]): the times of the samples on either side
+    /// of each jump, estimate clock, sorted.
+    jumps: Vec<(f64, f64)>,
 }
 
 impl Sampler<'_> {
@@ -197,6 +200,16 @@ impl Sampler<'_> {
             p: self.track.p[a] + (self.track.p[b] - self.track.p[a]) * f,
             r: ra + (rb - ra) * f,
         })
+    }
+
+    /// The stretch of the track between jumps that `[t − reach, t + reach]` (estimate clock) lies
+    /// in, `None` when a jump falls within it (its interpolation would mix the two frames).
+    fn segment(&self, t: f64, reach: f64) -> Option<usize> {
+        let k = self.jumps.partition_point(|&(_, after)| after <= t - reach);
+        match self.jumps.get(k) {
+            Some(&(before, _)) if before < t + reach => None,
+            _ => Some(k),
+        }
     }
 }
 
@@ -234,7 +247,14 @@ struct Terms {
     s_uu: f64,
     /// Σ|p_ref − p̄_ref|²: what the window's motion explains.
     s_rr: f64,
+    /// The stretches between the estimate's jumps the window's points fall in, each with its own
+    /// similarity and drift (1 without a jump).
+    segments: usize,
 }
+
+/// A stretch of a window between two of the estimate's jumps holds at least this many reference
+/// samples to be fitted (its similarity and drift are 8 parameters); fewer are left out.
+const MIN_SEGMENT_SAMPLES: usize = 6;
 
 /// The problem: reference samples, the estimate's poses, the windows.
 struct Problem<'a> {
@@ -258,6 +278,8 @@ struct Pt {
     dw: Vector3<f64>,
     rhat: Matrix3<f64>,
     t: f64,
+    /// The stretch of the estimate between jumps the point's stencil lies in.
+    seg: usize,
 }
 
 impl Terms {
@@ -265,6 +287,51 @@ impl Terms {
     fn rms_m(&self) -> f64 {
         (self.rss / self.n as f64).sqrt()
     }
+
+    /// The equations of two stretches of one window fitted apart (their nuisances their own).
+    fn plus(self, o: Terms) -> Terms {
+        Terms {
+            n: self.n + o.n,
+            rss: self.rss + o.rss,
+            h: self.h + o.h,
+            j: self.j + o.j,
+            g: self.g + o.g,
+            tr: self.tr + o.tr,
+            s_uu: self.s_uu + o.s_uu,
+            s_rr: self.s_rr + o.s_rr,
+            segments: self.segments + o.segments,
+        }
+    }
+}
+
+/// The reduced normal equations of the points `pts` under one similarity and drift (a window, or
+/// a stretch of one between jumps; see [`Problem::terms`]).
+fn segment_terms(pts: Vec<Pt>, shape: &ClockShape, with_lever: bool, s_bar: f64) -> Option<Terms> {
+    let m = shape.len();
+    let p = m + if with_lever { 3 } else { 0 };
+    let n = pts.len();
+    let win = WindowPoints::new(pts);
+    let nuisance = win.nuisance(s_bar);
+    let mut sums = NormalSums::zeros(p);
+    let mut shared = SharedColumns::new(m, with_lever);
+    for (q, dw) in win.pts.iter().zip(&nuisance.drift) {
+        let (e, cols) = nuisance.residual(&win, q, dw);
+        shared.fill(q, &nuisance, shape);
+        sums.add(&e, &cols, &shared.v, &shared.x);
+    }
+    let rss = sums.rss;
+    let (h, j, g) = sums.reduce(&nuisance, win.nf, s_bar)?;
+    Some(Terms {
+        n,
+        rss,
+        h,
+        j,
+        g,
+        tr: nuisance.tr,
+        s_uu: nuisance.s_uu,
+        s_rr: win.s_rr,
+        segments: 1,
+    })
 }
 
 impl Problem<'_> {
@@ -280,34 +347,34 @@ impl Problem<'_> {
         with_lever: bool,
         s_bar: f64,
     ) -> Option<Terms> {
-        let m = shape.len();
-        let p = m + if with_lever { 3 } else { 0 };
         let pts = self.points(w, shape, theta, d);
-        let n = pts.len();
-        if n < MIN_WINDOW_SAMPLES {
+        if pts.len() < MIN_WINDOW_SAMPLES {
             return None;
         }
-        let win = WindowPoints::new(pts);
-        let nuisance = win.nuisance(s_bar);
-        let mut sums = NormalSums::zeros(p);
-        let mut shared = SharedColumns::new(m, with_lever);
-        for (q, dw) in win.pts.iter().zip(&nuisance.drift) {
-            let (e, cols) = nuisance.residual(&win, q, dw);
-            shared.fill(q, &nuisance, shape);
-            sums.add(&e, &cols, &shared.v, &shared.x);
+        if pts.first().map(|q| q.seg) == pts.last().map(|q| q.seg) {
+            return segment_terms(pts, shape, with_lever, s_bar);
         }
-        let rss = sums.rss;
-        let (h, j, g) = sums.reduce(&nuisance, win.nf, s_bar)?;
-        Some(Terms {
-            n,
-            rss,
-            h,
-            j,
-            g,
-            tr: nuisance.tr,
-            s_uu: nuisance.s_uu,
-            s_rr: win.s_rr,
-        })
+        // A jump of the estimate within the window: each stretch between jumps its own similarity
+        // and drift, their reduced equations summed (the stretches share only θ and D).
+        let mut total: Option<Terms> = None;
+        let mut rest = pts.into_iter().peekable();
+        while let Some(first) = rest.next() {
+            let mut run = vec![first];
+            while let Some(q) = rest.next_if(|q| q.seg == run[0].seg) {
+                run.push(q);
+            }
+            if run.len() < MIN_SEGMENT_SAMPLES {
+                continue;
+            }
+            let Some(t) = segment_terms(run, shape, with_lever, s_bar) else {
+                continue;
+            };
+            total = Some(match total {
+                None => t,
+                Some(sum) => sum.plus(t),
+            });
+        }
+        total.filter(|t| t.n >= MIN_WINDOW_SAMPLES)
     }
 
     /// The points of window `w` (see [`Pt`]) for the clock `shape`/`theta` and the lever `d`: the
@@ -324,6 +391,9 @@ impl Problem<'_> {
             if pts.is_empty() {
                 hints = [self.sampler.track.t.partition_point(|&x| x < te - hw); 5];
             }
+            let Some(seg) = self.sampler.segment(te, hw) else {
+                continue;
+            };
             let mut at = |k: usize, dt: f64| self.sampler.at(te + dt, &mut hints[k]);
             let (Some(a), Some(m1), Some(p1), Some(m2), Some(p2)) =
                 (at(0, 0.0), at(1, -h), at(2, h), at(3, -hw), at(4, hw))
@@ -340,6 +410,7 @@ impl Problem<'_> {
                 dw: (u(&m2) - u(&p2)) / (2.0 * hw),
                 rhat: a.r,
                 t,
+                seg,
             });
         }
         pts
@@ -785,6 +856,11 @@ impl<'a> PoseData<'a> {
                     .map(|q| q.to_rotation_matrix().into_inner())
                     .collect(),
                 gap: self.params.max_gap_s,
+                jumps: crate::align::jumps::jumps(
+                    self.estimate.t,
+                    self.estimate.p,
+                    self.params.max_gap_s,
+                ),
             },
             h: (2.0 * period).clamp(STENCIL_MIN_S, STENCIL_MAX_S),
             hw: (2.0 * period).clamp(STENCIL_MIN_S, STENCIL_MAX_S) + 2.0 * period,
@@ -1491,7 +1567,7 @@ impl WindowSolver<'_> {
 /// form, c the whole fit's secant correction; σ̂² the residual per degree of freedom: 3 per point less the 8 of the similarity and drift
 /// and the offset).
 fn formal_sigma(t: &Terms, c: f64) -> Option<f64> {
-    let dof = (3 * t.n) as f64 - 9.0;
+    let dof = (3 * t.n) as f64 - 8.0 * t.segments as f64 - 1.0;
     let (h, j) = (t.h[(0, 0)], c * t.j[(0, 0)]);
     if dof <= 0.0 || h <= 0.0 || j <= 0.0 {
         return None;

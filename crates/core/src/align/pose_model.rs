@@ -22,7 +22,7 @@
 use nalgebra::Vector3;
 
 use crate::align::clock_model::{
-    choose_model, locate_change, ClockModel, ClockSegment, OffsetModel,
+    choose_model, locate_change, ClockModel, ClockSegment, OffsetModel, Steps,
 };
 use crate::align::offset_profile::{OffsetProfile, ProfileParams, ProfileWindow};
 use crate::align::pose_fit::{self, ClockShape, PoseData, PoseFit};
@@ -170,7 +170,13 @@ impl Mission<'_, '_> {
         let mut pass = 0;
         loop {
             pass += 1;
-            let chosen = self.pass(lever, scale, &clock)?;
+            // The first pass proposes steps on the BIC alone; the second, measured under them, judges.
+            let steps = if pass == 1 {
+                Steps::Provisional
+            } else {
+                Steps::Resolved
+            };
+            let chosen = self.pass(lever, scale, &clock, steps)?;
             // A model other than the constant was chosen on windows whose lever came from a
             // constant fit (or none): the profile is measured again with the lever of the chosen
             // model.
@@ -181,6 +187,10 @@ impl Mission<'_, '_> {
                     clock = (chosen.shape, l.theta.clone());
                     continue;
                 }
+            }
+            // Steps proposed but not measured again (their fit did not converge): judged now.
+            if pass == 1 && chosen.model.model == OffsetModel::Piecewise {
+                return self.pass(lever, scale, &clock, Steps::Resolved);
             }
             return Some(chosen);
         }
@@ -196,6 +206,7 @@ impl Mission<'_, '_> {
         lever: Vector3<f64>,
         scale: (f64, f64),
         (shape, theta): &(ClockShape, Vec<f64>),
+        steps: Steps,
     ) -> Option<Chosen> {
         let raw = pose_fit::profile(
             self.data,
@@ -215,7 +226,13 @@ impl Mission<'_, '_> {
             pose_fit::locate_change(self.data, &lever, scale.0, d, span)
                 .or_else(|| (self.signals)().and_then(|re| locate_change(re, d, span)))
         };
-        let model = choose_model(&profile, (offset0, whole_sigma), Some(&locate), self.forced);
+        let model = choose_model(
+            &profile,
+            (offset0, whole_sigma),
+            Some(&locate),
+            self.forced,
+            steps,
+        );
         let (next_shape, theta0) = shape_of(&model, offset0);
         let fit = match (&self.whole, model.model) {
             (Some(w), OffsetModel::Constant) => Some(w.clone()),
