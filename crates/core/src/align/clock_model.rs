@@ -13,7 +13,9 @@
 //!
 //! **Steps** are found by binary segmentation (the split of a stretch that lowers its χ² most, kept
 //! while it lowers the BIC by [`BIC_MARGIN`]; at most [`MAX_STEPS`]); a segment spans at least two
-//! independent windows, so a position jump, which spoils a window or two, is not a step. The change
+//! independent windows, so a position jump, which spoils a window or two, is not a step; and the two
+//! sides must differ by the step resolution, the drift's rule ([`SLOW_ERROR_FACTOR`]·z·σ of their
+//! difference), unless the profile is a first look ([`Steps::Provisional`]). The change
 //! time is then located on the data themselves, to a few seconds: on the positions when the pose fit
 //! made the profile ([`crate::align::pose_fit::locate_change`]), else on the signals
 //! ([`locate_change`]).

@@ -19,7 +19,9 @@
 //! window, the lever D (the estimate's sensor relative to the reference's point, in the estimate's
 //! body frame) and the clock Δt(t) = Σ θ_m·φ_m(t) (constant, linear or piecewise, [`ClockShape`]). ê
 //! and R̂ are interpolated linearly between the estimate's samples (gaps longer than the largest gap
-//! are not bridged). A window's scale is held to the mission's by a prior worth [`SCALE_PRIOR_M`] of
+//! are not bridged). Where the estimate jumps ([`crate::align::jumps`]: a localiser correcting
+//! itself), each side of the jump within a window has its own similarity and drift (the sides share
+//! only θ and D), and the points whose interpolation would reach across the jump are left out. A window's scale is held to the mission's by a prior worth [`SCALE_PRIOR_M`] of
 //! spread per sample, so a window that stands or turns in place (whose positions barely spread)
 //! keeps the mission's scale and still pins D: its reference stands still while ê sweeps the lever's
 //! arc. The similarity of each window has a closed form (Umeyama: an SVD of the 3×3 cross-covariance);
@@ -87,8 +89,8 @@ const STENCIL_MAX_S: f64 = 0.25;
 const MAX_ITERATIONS: usize = 60;
 /// The largest change of an offset parameter in one iteration, seconds.
 const MAX_STEP_S: f64 = 0.1;
-/// A window whose residual RMS exceeds this many times the median window's is left out (a jump of
-/// the estimate inside it: a localiser correcting itself is not a clock event).
+/// A window whose residual RMS exceeds this many times the median window's is left out (what the
+/// jump finder missed: a jump too small to find, an estimate that goes astray for a while).
 const OUTLIER_RMS_FACTOR: f64 = 4.0;
 /// The variance inflation of Δt by the lever above which the two are called inseparable.
 pub const INSEPARABLE_VIF: f64 = 25.0;
