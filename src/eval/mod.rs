@@ -663,7 +663,9 @@ fn pose_over_time(
     t0_ns: i64,
 ) -> Option<(TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport)> {
     use crate::align::pose_model::pose_clock_model;
-    let data = pose_data(params, pair, orientations);
+    let gap_s = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
+    let jumps = crate::align::jumps::jumps(pair.estimate.0, pair.estimate.1, gap_s);
+    let data = pose_data(pair, orientations, &jumps, gap_s);
     // The speed signals locate a step's time when the positions do not (computed already by
     // `auto`; otherwise only when asked).
     let speed = std::cell::OnceCell::new();
@@ -701,12 +703,13 @@ fn pose_over_time(
     Some((report, warnings, pose_note(&pc), pose_entry(&pc)))
 }
 
-/// What the pose fit works on: the pair's positions and the estimate's `orientations`, its gaps
-/// bounded like the signal searches' (`max_gap_s`, else the curvature's Δt_max).
+/// What the pose fit works on: the pair's positions, the estimate's `orientations` and `jumps`, its
+/// gaps bounded like the signal searches' (their `max_gap_s`, else the curvature's Δt_max).
 fn pose_data<'a>(
-    params: &crate::align::time_offset::OffsetParams,
     pair: &Pair<'a>,
     orientations: &'a [nalgebra::UnitQuaternion<f64>],
+    jumps: &'a [(f64, f64)],
+    max_gap_s: f64,
 ) -> crate::align::pose_fit::PoseData<'a> {
     use crate::align::pose_fit::{PoseData, PoseFitParams, PoseTrack};
     let (ref_t, ref_p) = pair.reference;
@@ -718,9 +721,10 @@ fn pose_data<'a>(
             t: est_t,
             p: est_p,
             q: orientations,
+            jumps,
         },
         params: PoseFitParams {
-            max_gap_s: params.max_gap_s.unwrap_or(params.curvature.dt_max_s),
+            max_gap_s,
             window_s: None,
         },
     }

@@ -21,8 +21,8 @@
 //! and R̂ are interpolated linearly between the estimate's samples (gaps longer than the largest gap
 //! are not bridged). Where the estimate jumps ([`crate::align::jumps`]: a localiser correcting
 //! itself), each side of the jump within a window has its own similarity and drift (the sides share
-//! only θ and D), and the points whose interpolation would reach across the jump are left out. A window's scale is held to the mission's by a prior worth [`SCALE_PRIOR_M`] of
-//! spread per sample, so a window that stands or turns in place (whose positions barely spread)
+//! only θ and D), and the points whose interpolation would reach across the jump are left out. A
+//! window's scale is held to the mission's by a prior worth [`SCALE_PRIOR_M`] of spread per sample, so a window that stands or turns in place (whose positions barely spread)
 //! keeps the mission's scale and still pins D: its reference stands still while ê sweeps the lever's
 //! arc. The similarity of each window has a closed form (Umeyama: an SVD of the 3×3 cross-covariance);
 //! θ and D are found by Gauss–Newton on the normal equations reduced by each window's similarity
@@ -96,12 +96,14 @@ const OUTLIER_RMS_FACTOR: f64 = 4.0;
 pub const INSEPARABLE_VIF: f64 = 25.0;
 
 /// The estimate's poses: times on its own clock (seconds from the common origin), positions and
-/// orientations (body to its frame).
+/// orientations (body to its frame), and where it jumps ([`crate::align::jumps::jumps`] of `t` and
+/// `p`: found once per track, the fits ask many times).
 #[derive(Clone, Copy)]
 pub struct PoseTrack<'a> {
     pub t: &'a [f64],
     pub p: &'a [Vector3<f64>],
     pub q: &'a [UnitQuaternion<f64>],
+    pub jumps: &'a [(f64, f64)],
 }
 
 /// The shape of Δt(t) = Σ θ_m·φ_m(t), t on the reference clock.
@@ -169,9 +171,6 @@ struct Sampler<'a> {
     /// iteration interpolates five poses, ten conversions otherwise).
     rotations: Vec<Matrix3<f64>>,
     gap: f64,
-    /// Where the estimate jumps ([`crate::align::jumps`]): the times of the samples on either side
-    /// of each jump, estimate clock, sorted.
-    jumps: Vec<(f64, f64)>,
 }
 
 impl Sampler<'_> {
@@ -207,8 +206,9 @@ impl Sampler<'_> {
     /// The stretch of the track between jumps that `[t − reach, t + reach]` (estimate clock) lies
     /// in, `None` when a jump falls within it (its interpolation would mix the two frames).
     fn segment(&self, t: f64, reach: f64) -> Option<usize> {
-        let k = self.jumps.partition_point(|&(_, after)| after <= t - reach);
-        match self.jumps.get(k) {
+        let jumps = self.track.jumps;
+        let k = jumps.partition_point(|&(_, after)| after <= t - reach);
+        match jumps.get(k) {
             Some(&(before, _)) if before < t + reach => None,
             _ => Some(k),
         }
@@ -858,11 +858,6 @@ impl<'a> PoseData<'a> {
                     .map(|q| q.to_rotation_matrix().into_inner())
                     .collect(),
                 gap: self.params.max_gap_s,
-                jumps: crate::align::jumps::jumps(
-                    self.estimate.t,
-                    self.estimate.p,
-                    self.params.max_gap_s,
-                ),
             },
             h: (2.0 * period).clamp(STENCIL_MIN_S, STENCIL_MAX_S),
             hw: (2.0 * period).clamp(STENCIL_MIN_S, STENCIL_MAX_S) + 2.0 * period,
@@ -1569,8 +1564,8 @@ impl WindowSolver<'_> {
 }
 
 /// A window's least-squares error of its one offset, seconds: σ̂·√H/(c·J) (the instrumental-variable
-/// form, c the whole fit's secant correction; σ̂² the residual per degree of freedom: 3 per point less the 8 of the similarity and drift
-/// and the offset).
+/// form, c the whole fit's secant correction; σ̂² the residual per degree of freedom: 3 per point
+/// less the 8 of each stretch's similarity and drift and the offset).
 fn formal_sigma(t: &Terms, c: f64) -> Option<f64> {
     let dof = (3 * t.n) as f64 - 8.0 * t.segments as f64 - 1.0;
     let (h, j) = (t.h[(0, 0)], c * t.j[(0, 0)]);
@@ -1641,6 +1636,7 @@ mod tests {
         t: Vec<f64>,
         p: Vec<Vector3<f64>>,
         q: Vec<UnitQuaternion<f64>>,
+        jumps: Vec<(f64, f64)>,
     }
 
     impl Sim {
@@ -1674,13 +1670,26 @@ mod tests {
                 ep.push(frame * ((p + r * lever) * 1.02) + Vector3::new(5.0, -3.0, 1.0));
                 eq.push(frame * r);
             }
+            let jumps = crate::align::jumps::jumps(&et, &ep, 1.0);
             Sim {
                 ref_t,
                 ref_p,
                 t: et,
                 p: ep,
                 q: eq,
+                jumps,
             }
+        }
+
+        /// The estimate moved by `by` from `at_s` on (its clock): a localiser correcting itself.
+        fn jumped(mut self, at_s: f64, by: Vector3<f64>) -> Sim {
+            for (t, p) in self.t.iter().zip(&mut self.p) {
+                if *t >= at_s {
+                    *p += by;
+                }
+            }
+            self.jumps = crate::align::jumps::jumps(&self.t, &self.p, 1.0);
+            self
         }
 
         fn data(&self) -> PoseData<'_> {
@@ -1691,6 +1700,7 @@ mod tests {
                     t: &self.t,
                     p: &self.p,
                     q: &self.q,
+                    jumps: &self.jumps,
                 },
                 params: PoseFitParams {
                     max_gap_s: 1.0,
@@ -1724,6 +1734,40 @@ mod tests {
         // (the prior keeps it at 0).
         let want = Vector3::new(lever.x, lever.y, 0.0) * 1.02;
         assert!((f.lever_m - want).norm() < 0.01, "{:?}", f.lever_m);
+        assert!(f.converged);
+    }
+
+    /// Two position jumps of the estimate inside windows (0.8 m and 0.4 m) are two new frames, not
+    /// clock events: the offset stays within half a millisecond and the windows holding them are
+    /// fitted.
+    #[test]
+    fn a_jump_of_the_estimate_does_not_move_the_offset() {
+        let dt_true = 0.137;
+        let lever = Vector3::new(0.3, 0.0, 0.2);
+        let sim = Sim::new(&|_| dt_true, &|t| 1.0 + 0.5 * (0.21 * t).sin(), lever)
+            .jumped(31.03, Vector3::new(0.6, -0.5, 0.1))
+            .jumped(79.51, Vector3::new(-0.3, 0.25, 0.0));
+        assert_eq!(sim.jumps.len(), 2, "{:?}", sim.jumps);
+        let data = sim.data();
+        let w = data.windows();
+        let f = fit(
+            &data,
+            &w,
+            ClockShape::Constant,
+            vec![0.1],
+            Vector3::zeros(),
+            true,
+        )
+        .unwrap();
+        assert!((f.theta[0] - dt_true).abs() < 5e-4, "{:?}", f.theta);
+        // The windows holding the jumps are fitted, not set aside (noise-free, the residuals are
+        // nanometres everywhere, so which window counts as an outlier is numerical noise).
+        for jump_s in [31.03 + dt_true, 79.51 + dt_true] {
+            assert!(f
+                .windows
+                .iter()
+                .any(|w| w.t_start < jump_s && jump_s < w.t_end));
+        }
         assert!(f.converged);
     }
 
