@@ -1710,6 +1710,12 @@ mod tests {
         }
     }
 
+    /// One offset and the lever over the windows `w`, from `start_s` and no lever.
+    fn constant_from(data: &PoseData<'_>, w: &[Window], start_s: f64) -> PoseFit {
+        let shape = ClockShape::Constant;
+        fit(data, w, shape, vec![start_s], Vector3::zeros(), true).unwrap()
+    }
+
     /// A body driving curves with speed changes; the estimate 0.3 m ahead and 0.2 m above its
     /// reference point, in a rotated frame with a 2 % scale error and a known offset: the fit
     /// recovers the offset to well under a millisecond and the horizontal lever to a centimetre.
@@ -1720,15 +1726,7 @@ mod tests {
         let sim = Sim::new(&|_| dt_true, &|t| 1.0 + 0.5 * (0.21 * t).sin(), lever);
         let data = sim.data();
         let w = data.windows();
-        let f = fit(
-            &data,
-            &w,
-            ClockShape::Constant,
-            vec![0.1],
-            Vector3::zeros(),
-            true,
-        )
-        .unwrap();
+        let f = constant_from(&data, &w, 0.1);
         assert!((f.theta[0] - dt_true).abs() < 5e-4, "{:?}", f.theta);
         // The horizontal lever, scaled like the estimate; the vertical one is invisible without tilt
         // (the prior keeps it at 0).
@@ -1750,15 +1748,7 @@ mod tests {
         assert_eq!(sim.jumps.len(), 2, "{:?}", sim.jumps);
         let data = sim.data();
         let w = data.windows();
-        let f = fit(
-            &data,
-            &w,
-            ClockShape::Constant,
-            vec![0.1],
-            Vector3::zeros(),
-            true,
-        )
-        .unwrap();
+        let f = constant_from(&data, &w, 0.1);
         assert!((f.theta[0] - dt_true).abs() < 5e-4, "{:?}", f.theta);
         // The windows holding the jumps are fitted, not set aside (noise-free, the residuals are
         // nanometres everywhere, so which window counts as an outlier is numerical noise).
