@@ -35,6 +35,9 @@ pub const POSE_SIGMA_FLOOR_S: f64 = 1e-4;
 /// The pose fit's Δt may differ from the signal search's by this much at most, seconds: farther, the
 /// fit went to another basin and is not used.
 pub const MAX_DISAGREEMENT_S: f64 = 0.3;
+/// The step of the coarse search for a start when the fit from the signal search's answer does not
+/// converge, seconds (the fit converged from 34–100 ms off where it stalled from 64–218 ms).
+pub const COARSE_STEP_S: f64 = 0.025;
 /// Each window of the profile searches this far around the whole mission's Δt when its own
 /// refinement fails (a clock step), seconds.
 pub const WINDOW_SEARCH_S: f64 = 3.0;
@@ -108,22 +111,33 @@ pub fn pose_clock_model(
     })
 }
 
-/// Step 1: one Δt and the lever over every window from `start_s`; `None` when it does not converge
-/// or lands farther than [`MAX_DISAGREEMENT_S`] from the start (another basin).
+/// Step 1: one Δt and the lever over every window from `start_s`, or, when that does not converge,
+/// from the best of a coarse search within [`MAX_DISAGREEMENT_S`] of it
+/// ([`pose_fit::coarse_start`], every [`COARSE_STEP_S`]); `None` when neither converges or the fit
+/// lands farther than [`MAX_DISAGREEMENT_S`] from the start (another basin).
 fn whole_mission_fit(
     data: &PoseData<'_>,
     windows: &[pose_fit::Window],
     start_s: f64,
 ) -> Option<PoseFit> {
-    pose_fit::fit(
-        data,
-        windows,
-        ClockShape::Constant,
-        vec![start_s],
-        Vector3::zeros(),
-        true,
-    )
-    .filter(|w| w.converged && (w.theta[0] - start_s).abs() <= MAX_DISAGREEMENT_S)
+    let from = |theta: f64| {
+        pose_fit::fit(
+            data,
+            windows,
+            ClockShape::Constant,
+            vec![theta],
+            Vector3::zeros(),
+            true,
+        )
+        .filter(|w| w.converged && (w.theta[0] - start_s).abs() <= MAX_DISAGREEMENT_S)
+    };
+    from(start_s).or_else(|| {
+        let coarse =
+            pose_fit::coarse_start(data, windows, start_s, (MAX_DISAGREEMENT_S, COARSE_STEP_S))?;
+        ((coarse - start_s).abs() >= COARSE_STEP_S)
+            .then(|| from(coarse))
+            .flatten()
+    })
 }
 
 /// One mission's pose fits: the data, the windows of the fits and of the profile, the whole
