@@ -151,7 +151,8 @@ fn one_mission() {
         .unwrap();
     let seed: u64 = std::env::var("SEED").unwrap_or("1".into()).parse().unwrap();
     let mut s = Scenario::draw(kind, seed);
-    // ZERO=yaw,scale,terrain,noise,ref_lever,est_lever,gait: switch effects off one by one.
+    // ZERO=yaw,scale,terrain,noise,ref_lever,est_lever,gait: switch effects off one by one;
+    // REF_HZ, EST_HZ: other rates.
     let zero = std::env::var("ZERO").unwrap_or_default();
     for z in zero.split(',') {
         match z {
@@ -188,6 +189,12 @@ fn one_mission() {
             "lat_est" => s.receipt_latency_s = s.receipt_latency_s.map(|l| (l.0, 0.0)),
             _ => {}
         }
+    }
+    if let Ok(v) = std::env::var("EST_HZ") {
+        s.est_rate_hz = v.parse().unwrap();
+    }
+    if let Ok(v) = std::env::var("REF_HZ") {
+        s.ref_rate_hz = v.parse().unwrap();
     }
     println!(
         "{:?} seed {} ref {} Hz est {} Hz levers {:?} {:?} noise {:.3} yaw walk {:.3} latency {:?}",
