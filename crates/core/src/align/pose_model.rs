@@ -202,19 +202,22 @@ impl Mission<'_, '_> {
                     continue;
                 }
             }
-            // Steps proposed but not measured again (their fit did not converge): judged now.
+            // Steps proposed but not measured again (their fit did not converge): judged now, on
+            // the same profile.
             if pass == 1 && chosen.model.model == OffsetModel::Piecewise {
-                return self.pass(lever, scale, &clock, Steps::Resolved);
+                return Some(self.decide(
+                    chosen.profile,
+                    (lever, scale, clock.1[0]),
+                    Steps::Resolved,
+                ));
             }
             return Some(chosen);
         }
     }
 
     /// One pass: the profile with the lever `lever` held (the mission's scale and the secant
-    /// correction `scale`), each window started from the clock `clock`; the model chosen from it;
-    /// the chosen model's parameters fitted with the lever over every window, σ by the jackknife
-    /// over windows (the whole mission's fit when that is the constant). `None` with fewer than
-    /// three windows in the profile.
+    /// correction `scale`), each window started from the clock `clock`, and what
+    /// [`Self::decide`] makes of it. `None` with fewer than three windows in the profile.
     fn pass(
         &self,
         lever: Vector3<f64>,
@@ -231,9 +234,22 @@ impl Mission<'_, '_> {
             WINDOW_SEARCH_S,
         );
         let profile = calibrated_profile(consistent_windows(raw), &self.profile_windows)?;
+        Some(self.decide(profile, (lever, scale, theta[0]), steps))
+    }
+
+    /// The model chosen from `profile` (measured with `lever` held, at the mission's scale and
+    /// secant correction `scale`, its windows started from a clock whose first parameter is
+    /// `clock_s`) and its parameters fitted with the lever over every window, σ by the jackknife
+    /// over windows (the whole mission's fit when that is the constant).
+    fn decide(
+        &self,
+        profile: OffsetProfile,
+        (lever, scale, clock_s): (Vector3<f64>, (f64, f64), f64),
+        steps: Steps,
+    ) -> Chosen {
         let (offset0, whole_sigma) = match &self.whole {
             Some(w) => (w.theta[0], w.theta_sigma[0].max(POSE_SIGMA_FLOOR_S)),
-            None => (theta[0], f64::INFINITY),
+            None => (clock_s, f64::INFINITY),
         };
         // A step's time on the positions, else on the speed signals.
         let locate = |d: (f64, f64), span: (f64, f64)| {
@@ -260,13 +276,13 @@ impl Mission<'_, '_> {
             )
             .filter(|f| f.converged),
         };
-        Some(Chosen {
+        Chosen {
             profile,
             model,
             shape: next_shape,
             fit,
             lever_m: lever,
-        })
+        }
     }
 
     /// The windows a fit of `shape` uses: every one, less those holding a change of a piecewise
