@@ -494,11 +494,7 @@ impl WindowPoints {
     /// increments give the drift a basis). The scale is held to the mission's `s_bar` by its prior.
     fn nuisance(&self, s_bar: f64) -> Nuisance {
         let nf = self.nf;
-        let sp: f64 = std::env::var("SCALEPRIOR")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(SCALE_PRIOR_M);
-        let lambda = nf * sp * sp;
+        let lambda = nf * SCALE_PRIOR_M * SCALE_PRIOR_M;
         let scale_of = |tr: f64, s_uu: f64| ((tr + lambda * s_bar) / (s_uu + lambda)).max(1e-3);
         let (mut rot, mut tr, mut s_uu) = self.similarity(&|i| self.pts[i].u - self.ubar_m);
         // The estimate's heading drifting within the window at a rate b about its vertical: its
@@ -519,7 +515,7 @@ impl WindowPoints {
                         (rot * w).dot(&(s * (rot * (q.u - self.ubar_m)) - (q.r - self.rbar_m)))
                     })
                     .sum();
-                b = num / (s * (d_ww + nf * drift_prior() / (s * s)));
+                b = num / (s * (d_ww + nf * DRIFT_PRIOR_M2S2 / (s * s)));
                 (rot, tr, s_uu) = self.similarity(&|i| self.pts[i].u - self.ubar_m - drift[i] * b);
                 s = scale_of(tr, s_uu);
             }
@@ -722,8 +718,8 @@ impl NormalSums {
         let lambda = nuisance.lambda_m2;
         self.ntn[(6, 6)] += lambda;
         self.nte[6] += lambda * (nuisance.scale - s_bar);
-        self.ntn[(7, 7)] += nf * drift_prior();
-        self.nte[7] += nf * drift_prior() * nuisance.rate_rad_s;
+        self.ntn[(7, 7)] += nf * DRIFT_PRIOR_M2S2;
+        self.nte[7] += nf * DRIFT_PRIOR_M2S2 * nuisance.rate_rad_s;
         // A rotation or a drift the window does not determine (its points on a line, standing)
         // stays put.
         let ridge = 1e-9 * (0..8).map(|a| self.ntn[(a, a)]).fold(0.0, f64::max);
@@ -743,13 +739,6 @@ impl NormalSums {
         let g = DVector::from_column_slice(&self.vte) - xv.transpose() * nte_d;
         Some((h, j, g))
     }
-}
-
-fn drift_prior() -> f64 {
-    std::env::var("DRIFTPRIOR")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(DRIFT_PRIOR_M2S2)
 }
 
 /// The rotation R maximising tr(Rᵀ·cov) (Kabsch: cov = Σ (r − r̄)(u − ū)ᵀ), identity when cov
@@ -1063,8 +1052,8 @@ const COARSE_LEVER_TOLERANCE_M: f64 = 1e-3;
 /// validation missions the fit stalled 111 ms off, or ran away, from a start 218 and 64 ms off, and
 /// converged from within 100 and 34 ms). With a single lever step the residual of a robot turning
 /// in place fell steadily away from the truth (the lever left at half its length), and the best
-/// candidate was the search's edge, 0.36 s off; settled, it is 11 ms off and the fit converges. `None` when no
-/// candidate has windows.
+/// candidate was the search's edge, 0.36 s off; settled, it is 11 ms off and the fit converges.
+/// `None` when no candidate has windows.
 pub fn coarse_start(
     data: &PoseData<'_>,
     windows: &[Window],
