@@ -141,7 +141,7 @@ fn validate_command_prints_the_table_and_writes_grades() {
 }
 
 /// Development aid: one mission's report in detail. `KIND=ground SEED=3 cargo test --release --test
-/// validate -- --ignored --nocapture one_mission`.
+/// it -- --ignored --nocapture one_mission`.
 #[test]
 #[ignore]
 fn one_mission() {
@@ -151,8 +151,8 @@ fn one_mission() {
         .unwrap();
     let seed: u64 = std::env::var("SEED").unwrap_or("1".into()).parse().unwrap();
     let mut s = Scenario::draw(kind, seed);
-    // ZERO=yaw,scale,terrain,noise,ref_lever,est_lever,gait: switch effects off one by one;
-    // REF_HZ, EST_HZ: other rates.
+    // ZERO=yaw,scale,terrain,noise,ref_lever,est_lever,gait,latency,lat_ref,lat_est,… (the match
+    // below): switch effects off one by one; REF_HZ, EST_HZ: other rates.
     let zero = std::env::var("ZERO").unwrap_or_default();
     for z in zero.split(',') {
         match z {

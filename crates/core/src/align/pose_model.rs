@@ -11,8 +11,8 @@
 //!    when the windows' calibrated σ refute one constant (BIC margin), a step only with two windows
 //!    of support on each side.
 //! 4. **Final fit.** The chosen model's parameters (constant; offset and drift; one offset per
-//!    segment) fitted again with D over every window, and their σ the jackknife over windows (see
-//!    [`crate::align::pose_fit`]).
+//!    segment) fitted again with D over every window, and their σ the jackknife over windows, at
+//!    least the formal σ (see [`crate::align::pose_fit`]).
 //!
 //! A constant clock whose drift the data cannot resolve could still hide one below the resolution:
 //! the constant's σ then adds the part of the measured drift beyond its own noise,
@@ -240,7 +240,7 @@ impl Mission<'_, '_> {
     /// The model chosen from `profile` (measured with `lever` held, at the mission's scale and
     /// secant correction `scale`, its windows started from a clock whose first parameter is
     /// `clock_s`) and its parameters fitted with the lever over every window, σ by the jackknife
-    /// over windows (the whole mission's fit when that is the constant).
+    /// over windows, at least the formal σ (the whole mission's fit when that is the constant).
     fn decide(
         &self,
         profile: OffsetProfile,
