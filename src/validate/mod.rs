@@ -112,6 +112,8 @@ pub struct MissionGrade {
     pub drift_true_ppm: f64,
     pub drift_ppm: Option<f64>,
     pub drift_measured_ppm: Option<f64>,
+    /// The reported drift's σ (linear: the fit's; otherwise the profile line's), ppm.
+    pub drift_sigma_ppm: Option<f64>,
     pub drift_resolution_ppm: Option<f64>,
     /// Steps: the located change time's error (s) and the segments' largest error (s).
     pub step_time_error_s: Option<f64>,
@@ -187,6 +189,7 @@ pub fn grade(truth: &dyn ClockTruth, report: &Report, t0_s: f64) -> MissionGrade
         drift_true_ppm: truth.drift_ppm(),
         drift_ppm: o.drift_ppm,
         drift_measured_ppm: o.drift_measured_ppm,
+        drift_sigma_ppm: o.drift_sigma_ppm,
         drift_resolution_ppm: o.drift_resolution_ppm,
         step_time_error_s,
         step_segment_error_s,
@@ -290,6 +293,7 @@ pub fn run_scenario(s: &Scenario) -> MissionGrade {
             drift_true_ppm: s.clock_drift_ppm,
             drift_ppm: None,
             drift_measured_ppm: None,
+            drift_sigma_ppm: None,
             drift_resolution_ppm: None,
             step_time_error_s: None,
             step_segment_error_s: None,
@@ -490,10 +494,10 @@ fn drift_rows(out: &mut String, grades: &[MissionGrade]) {
     let _ = writeln!(out);
     let _ = writeln!(
         out,
-        "| drift: kind, seed | platform | true ppm | model | drift ppm (error) | resolution ppm | σ ms | truth's spread about Δt ms |"
+        "| drift: kind, seed | platform | true ppm | model | drift ppm ± σ (error) | resolution ppm | σ ms | truth's spread about Δt ms |"
     );
     let _ = writeln!(out, "|---|---|---|---|---|---|---|---|");
-    for g in drifting {
+    for g in &drifting {
         let _ = writeln!(
             out,
             "| {} {} | {} | {:+.0} | {} | {} | {} | {} | {:.1} |",
@@ -503,7 +507,8 @@ fn drift_rows(out: &mut String, grades: &[MissionGrade]) {
             g.drift_true_ppm,
             g.model.map_or("-", |m| m.as_str()),
             g.drift_ppm.map_or("-".into(), |d| format!(
-                "{d:+.1} ({:+.1})",
+                "{d:+.1} ± {:.1} ({:+.1})",
+                g.drift_sigma_ppm.unwrap_or(f64::NAN),
                 d - g.drift_true_ppm
             )),
             g.drift_resolution_ppm
@@ -511,6 +516,45 @@ fn drift_rows(out: &mut String, grades: &[MissionGrade]) {
             g.sigma_s.map_or("-".into(), ms),
             g.spread_s * 1e3
         );
+    }
+    let c = drift_calibration(&drifting);
+    if c.declared > 0 {
+        let _ = writeln!(
+            out,
+            "\nDeclared drifts: {} of {}; 2σ covers the drift's error on {:.0} %, median |error|/σ {:.2}.",
+            c.declared,
+            drifting.len(),
+            c.coverage_2sigma * 100.0,
+            c.median_error_over_sigma
+        );
+    }
+}
+
+/// How well the declared drifts' σ describe their errors.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct DriftCalibration {
+    /// Missions whose model is `linear` (a drift applied) with a σ.
+    pub declared: usize,
+    /// Share of them whose |drift − truth| ≤ 2σ.
+    pub coverage_2sigma: f64,
+    /// Median of |drift − truth|/σ.
+    pub median_error_over_sigma: f64,
+}
+
+/// The [`DriftCalibration`] of `grades` (those without a declared drift are skipped).
+pub fn drift_calibration(grades: &[&MissionGrade]) -> DriftCalibration {
+    let mut r: Vec<f64> = grades
+        .iter()
+        .filter_map(|g| {
+            let (d, s) = (g.drift_ppm?, g.drift_sigma_ppm?);
+            (s > 0.0).then(|| (d - g.drift_true_ppm).abs() / s)
+        })
+        .collect();
+    r.sort_by(f64::total_cmp);
+    DriftCalibration {
+        declared: r.len(),
+        coverage_2sigma: r.iter().filter(|&&x| x <= 2.0).count() as f64 / r.len().max(1) as f64,
+        median_error_over_sigma: percentile(&r, 0.5),
     }
 }
 

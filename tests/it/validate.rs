@@ -107,6 +107,28 @@ fn reduced_validation_holds_the_calibration() {
     }
 }
 
+/// Step missions whose profile windows, started on the wrong side of the step or without a lever,
+/// settled at roots of their own (sharp, a few hundred milliseconds off, no outlier by their
+/// residual): 1003's segments came out 245 ms off, 3035 was called constant. Each window now takes
+/// the root its search finds when that is clearly deeper.
+#[test]
+fn windows_in_another_basin_do_not_hide_a_step() {
+    for seed in [1003, 3035] {
+        let grades = validate_missions(
+            &ValidateOptions {
+                kinds: vec![MissionKind::Step],
+                per_kind: 1,
+                first_seed: seed,
+            },
+            &|_, _| {},
+        );
+        let g = &grades[0];
+        let what = format!("step {seed}: {:?} {:?}", g.model, g.step_segment_error_s);
+        assert_eq!(g.model, Some(OffsetModel::Piecewise), "{what}");
+        assert!(g.step_segment_error_s.unwrap() <= 0.020, "{what}");
+    }
+}
+
 #[test]
 fn validate_command_prints_the_table_and_writes_grades() {
     let dir = std::env::temp_dir().join(format!("trajdrift-validate-{}", std::process::id()));

@@ -51,12 +51,17 @@
 //! (docs/evidence.md).
 //!
 //! Each window's own Δt (the offset profile, [`profile`]) comes from the same fit with D held and one
-//! θ per window. Its σ is the window's least-squares error σ̂_k/√H_k (σ̂_k² = its residual per degree
-//! of freedom) times one factor f for the mission, from the windows' scatter about the line through
-//! their neighbours: e_k = Δt_k − (interpolation of Δt_{k−1} and Δt_{k+1} at t_k) is free of any
-//! constant and any linear drift, so under honest σ each e_k/σ(e_k) is a unit normal; f² is the
-//! mean of those squares with the ones beyond 4σ set aside ([`CLIP_CHI2`]: a step, which spoils
-//! two, does not decide it). This is what makes a drift or a step, judged against the windows' σ, a claim the
+//! θ per window, refined from the clock's value at the window and then searched within ±3 s for a
+//! deeper root (`WindowSolver::deeper`): a window started on the wrong side of a clock step, or in a
+//! first look without a lever, can settle at a root of its own a few hundred milliseconds off, as
+//! sharp as the right one.
+//!
+//! A window's σ is its least-squares error σ̂_k/√H_k (σ̂_k² = its residual per degree of freedom)
+//! times one factor f for the mission, from the windows' scatter about the line through their
+//! neighbours: e_k = Δt_k − (interpolation of Δt_{k−1} and Δt_{k+1} at t_k) is free of any constant
+//! and any linear drift, so under honest σ each e_k/σ(e_k) is a unit normal; f² is the mean of those
+//! squares with the ones beyond 4σ set aside ([`CLIP_CHI2`]: a step, which spoils two, does not
+//! decide it). This is what makes a drift or a step, judged against the windows' σ, a claim the
 //! data support (see [`crate::align::clock_model`]).
 
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, UnitQuaternion, Vector3};
@@ -98,6 +103,14 @@ const MAX_STEP_S: f64 = 0.1;
 /// A window whose residual RMS exceeds this many times the median window's is left out (what the
 /// jump finder missed: a jump too small to find, an estimate that goes astray for a while).
 const OUTLIER_RMS_FACTOR: f64 = 4.0;
+/// How much lower (in χ² of the window's own noise) a profile window's residual must be at the root
+/// its search finds than at the root nearest its start for the search's to be taken (5σ).
+const SEARCH_CHI2: f64 = 25.0;
+/// A window's search compares its residual on about this many of its reference samples (evenly
+/// spread; the root it finds is then refined on all of them).
+const SEARCH_POINTS: usize = 32;
+/// The spacing of a window's search over offsets, seconds.
+const SEARCH_STEP_S: f64 = 0.05;
 /// The variance inflation of Δt by the lever above which the two are called inseparable.
 pub const INSEPARABLE_VIF: f64 = 25.0;
 
@@ -391,6 +404,59 @@ impl Problem<'_> {
         total.filter(|t| t.n >= MIN_WINDOW_SAMPLES)
     }
 
+    /// Window `w`'s residual at the constant offset `offset_s` with the lever `d`: the mean squared
+    /// residual per point once each stretch's similarity is fitted (scale held about `s_bar`; no
+    /// heading drift), metres², on about [`SEARCH_POINTS`] of its samples. What a search over
+    /// offsets compares: one interpolation per point instead of [`Problem::points`]'s five, and no
+    /// normal equations. `None` with fewer than [`MIN_WINDOW_SAMPLES`] points.
+    fn mean_square_m2(
+        &self,
+        w: &Window,
+        offset_s: f64,
+        d: &Vector3<f64>,
+        s_bar: f64,
+    ) -> Option<f64> {
+        let mut pts: Vec<Pt> = Vec::with_capacity(w.range.len());
+        let mut hint: Option<usize> = None;
+        let stride = (w.range.len() / SEARCH_POINTS).max(1);
+        for i in w.range.clone().step_by(stride) {
+            let t = self.ref_t[i];
+            let te = t - offset_s;
+            let hint = hint
+                .get_or_insert_with(|| self.sampler.track.t.partition_point(|&x| x < te - self.hw));
+            let (Some(seg), Some(a)) =
+                (self.sampler.segment(te, self.hw), self.sampler.at(te, hint))
+            else {
+                continue;
+            };
+            pts.push(Pt {
+                r: self.ref_p[i],
+                e: a.p,
+                u: a.p - a.r * d,
+                du: Vector3::zeros(),
+                dw: Vector3::zeros(),
+                rhat: a.r,
+                t,
+                seg,
+            });
+        }
+        let (mut rss, mut n) = (0.0, 0usize);
+        let mut rest = pts.into_iter().peekable();
+        while let Some(first) = rest.next() {
+            let mut run = vec![first];
+            while let Some(q) = rest.next_if(|q| q.seg == run[0].seg) {
+                run.push(q);
+            }
+            if run.len() < MIN_SEGMENT_SAMPLES {
+                continue;
+            }
+            let win = WindowPoints::new(run);
+            rss += win.similarity_rss(s_bar);
+            n += win.pts.len();
+        }
+        (n >= MIN_WINDOW_SAMPLES).then(|| rss / n as f64)
+    }
+
     /// The points of window `w` (see [`Pt`]) for the clock `shape`/`theta` and the lever `d`: the
     /// reference samples whose time on the estimate's clock, and the stencils of the central
     /// differences around it, fall where the estimate's poses can be interpolated.
@@ -463,6 +529,24 @@ impl WindowPoints {
         }
     }
 
+    /// The scale given Σ r̃·R·ũ (`tr`) and Σ|ũ|² (`s_uu`), held about the mission's `s_bar` by its
+    /// prior (weight n·[`SCALE_PRIOR_M`]²).
+    fn scale_of(&self, tr: f64, s_uu: f64, s_bar: f64) -> f64 {
+        let lambda = self.nf * SCALE_PRIOR_M * SCALE_PRIOR_M;
+        ((tr + lambda * s_bar) / (s_uu + lambda)).max(1e-3)
+    }
+
+    /// Σ|p_ref − r̄ − s·R·(u − ū)|² under the similarity alone (no heading drift): the residual a
+    /// search over offsets compares.
+    fn similarity_rss(&self, s_bar: f64) -> f64 {
+        let (rot, tr, s_uu) = self.similarity(&|i| self.pts[i].u - self.ubar_m);
+        let s = self.scale_of(tr, s_uu, s_bar);
+        self.pts
+            .iter()
+            .map(|q| (s * (rot * (q.u - self.ubar_m)) + self.rbar_m - q.r).norm_squared())
+            .sum()
+    }
+
     /// The similarity of the centred points ũ_i = `at(i)` to the centred reference positions r̃:
     /// the rotation R maximising Σ r̃·R·ũ (Umeyama), that Σ r̃·R·ũ and Σ|ũ|² (the scale's evidence).
     fn similarity(&self, at: &dyn Fn(usize) -> Vector3<f64>) -> (Matrix3<f64>, f64, f64) {
@@ -502,7 +586,7 @@ impl WindowPoints {
     fn nuisance(&self, s_bar: f64) -> Nuisance {
         let nf = self.nf;
         let lambda = nf * SCALE_PRIOR_M * SCALE_PRIOR_M;
-        let scale_of = |tr: f64, s_uu: f64| ((tr + lambda * s_bar) / (s_uu + lambda)).max(1e-3);
+        let scale_of = |tr: f64, s_uu: f64| self.scale_of(tr, s_uu, s_bar);
         let (mut rot, mut tr, mut s_uu) = self.similarity(&|i| self.pts[i].u - self.ubar_m);
         // The estimate's heading drifting within the window at a rate b about its vertical: its
         // positions carry b·∫(τ − t̄)·ẑ × dê (integrated over the window's own increments), which
@@ -1573,7 +1657,11 @@ pub fn profile(
     };
     let raw: Vec<Option<(f64, Terms)>> = windows
         .par_iter()
-        .map(|w| solver.refine(w, start(w.t())))
+        .map(|w| {
+            let t0 = start(w.t());
+            let refined = solver.refine(w, t0)?;
+            Some(solver.deeper(w, refined, t0, search_s))
+        })
         .collect();
     let mut rms: Vec<f64> = raw.iter().flatten().map(|(_, t)| t.rms_m()).collect();
     if rms.is_empty() {
@@ -1674,17 +1762,53 @@ impl WindowSolver<'_> {
         None
     }
 
-    /// Window `w`'s offset searched every 50 ms within ±`search_s` of `t0_s` (the least residual),
-    /// then refined: for a window the start left in another basin (a clock step).
+    /// `refined` (window `w`'s root nearest the start `t0_s`), or the root of the least residual
+    /// within ±`search_s` of the start when that lies in another basin and its residual is lower by
+    /// more than [`SEARCH_CHI2`] of the window's own noise. A start on the wrong side of a clock
+    /// step, or a first look without a lever, can leave a window at a root of its own a few hundred
+    /// milliseconds off, as sharp as the right one (σ of 3 ms) and no outlier by its residual; the
+    /// window then hides the step, or a constant that is not the clock's.
+    fn deeper(&self, w: &Window, refined: (f64, Terms), t0_s: f64, search_s: f64) -> (f64, Terms) {
+        let dof = refined.1.dof() - 1.0;
+        let Some(best) = self.search_start(w, t0_s, search_s) else {
+            return refined;
+        };
+        if dof <= 0.0 || (best - refined.0).abs() <= SEARCH_STEP_S {
+            return refined;
+        }
+        // Per point: a root that leaves a few of the window's samples uninterpolated is not
+        // deeper for their absence.
+        let mean_square = |t: &Terms| t.rss / t.n as f64;
+        let noise = refined.1.rss / dof;
+        match self.refine(w, best) {
+            Some(s)
+                if (mean_square(&refined.1) - mean_square(&s.1)) * refined.1.n as f64
+                    > SEARCH_CHI2 * noise =>
+            {
+                s
+            }
+            _ => refined,
+        }
+    }
+
+    /// Window `w`'s offset searched every [`SEARCH_STEP_S`] within ±`search_s` of `t0_s` (the least
+    /// residual), then refined: for a window the start left in another basin (a clock step).
     fn search(&self, w: &Window, t0_s: f64, search_s: f64) -> Option<(f64, Terms)> {
-        let steps = (search_s / 0.05).round() as i64;
-        let best = (-steps..=steps)
+        self.refine(w, self.search_start(w, t0_s, search_s)?)
+    }
+
+    /// The offset of least residual every [`SEARCH_STEP_S`] within ±`search_s` of `t0_s`.
+    fn search_start(&self, w: &Window, t0_s: f64, search_s: f64) -> Option<f64> {
+        let steps = (search_s / SEARCH_STEP_S).round() as i64;
+        (-steps..=steps)
             .filter_map(|k| {
-                let th = t0_s + k as f64 * 0.05;
-                self.terms(w, th).map(|t| (th, t.rss))
+                let th = t0_s + k as f64 * SEARCH_STEP_S;
+                self.problem
+                    .mean_square_m2(w, th, &self.lever_m, self.scale)
+                    .map(|ms| (th, ms))
             })
-            .min_by(|a, b| a.1.total_cmp(&b.1))?;
-        self.refine(w, best.0)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|best| best.0)
     }
 }
 

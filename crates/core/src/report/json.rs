@@ -189,7 +189,8 @@ pub struct TimeOffsetReport {
     /// Δt(t) = offset_s − drift_ppm·10⁻⁶·(t − t_mid).
     #[serde(default)]
     pub t_mid: Option<f64>,
-    /// The smallest drift the mission resolves, 3 `drift_sigma_ppm`.
+    /// The smallest drift the mission resolves, ppm: a drift below it is not declared
+    /// ([`crate::align::clock_model::ClockModel::drift_resolution_ppm`]).
     #[serde(default)]
     pub drift_resolution_ppm: Option<f64>,
     /// The clock model applied to the estimate's stamps (`constant`, `linear`, `piecewise`).
