@@ -416,9 +416,9 @@ impl Problem<'_> {
         d: &Vector3<f64>,
         s_bar: f64,
     ) -> Option<f64> {
-        let mut pts: Vec<Pt> = Vec::with_capacity(w.range.len());
-        let mut hint: Option<usize> = None;
         let stride = (w.range.len() / SEARCH_POINTS).max(1);
+        let mut pts: Vec<Pt> = Vec::with_capacity(w.range.len().div_ceil(stride));
+        let mut hint: Option<usize> = None;
         for i in w.range.clone().step_by(stride) {
             let t = self.ref_t[i];
             let te = t - offset_s;
@@ -1639,16 +1639,30 @@ impl WindowOffset {
     }
 }
 
-/// Each window's own Δt with the lever `lever` held, started from `start(t)` (a window that fails
-/// from there is searched ±`search_s` first). Windows that do not converge are left out.
+/// Which profile windows are searched beyond their refinement from the start, and how far
+/// (seconds each way).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WindowSearch {
+    /// Only a window that fails from its start or leaves a residual far above the others'.
+    Failed(f64),
+    /// Every window as well, for a deeper root than the one it settled at
+    /// (`WindowSolver::deeper`).
+    Every(f64),
+}
+
+/// Each window's own Δt with the lever `lever` held, started from `start(t)` and searched as
+/// `search` says. Windows that do not converge are left out.
 pub fn profile(
     data: &PoseData<'_>,
     windows: &[Window],
     lever: Vector3<f64>,
     (scale, c): (f64, f64),
     start: &(dyn Fn(f64) -> f64 + Sync),
-    search_s: f64,
+    search: WindowSearch,
 ) -> Vec<WindowOffset> {
+    let search_s = match search {
+        WindowSearch::Failed(s) | WindowSearch::Every(s) => s,
+    };
     let solver = WindowSolver {
         problem: data.problem(),
         lever_m: lever,
@@ -1660,7 +1674,10 @@ pub fn profile(
         .map(|w| {
             let t0 = start(w.t());
             let refined = solver.refine(w, t0)?;
-            Some(solver.deeper(w, refined, t0, search_s))
+            Some(match search {
+                WindowSearch::Failed(_) => refined,
+                WindowSearch::Every(_) => solver.deeper(w, refined, t0, search_s),
+            })
         })
         .collect();
     let mut rms: Vec<f64> = raw.iter().flatten().map(|(_, t)| t.rms_m()).collect();

@@ -25,7 +25,7 @@ use crate::align::clock_model::{
     choose_model, locate_change, ClockModel, ClockSegment, OffsetModel, Steps,
 };
 use crate::align::offset_profile::{OffsetProfile, ProfileParams, ProfileWindow};
-use crate::align::pose_fit::{self, ClockShape, PoseData, PoseFit};
+use crate::align::pose_fit::{self, ClockShape, PoseData, PoseFit, WindowSearch};
 use crate::align::signals::SignalView;
 use crate::align::time_offset::OffsetMethod;
 
@@ -41,6 +41,9 @@ pub const COARSE_STEP_S: f64 = 0.025;
 /// Each window of the profile searches this far around the whole mission's Δt when its own
 /// refinement fails (a clock step), seconds.
 pub const WINDOW_SEARCH_S: f64 = 3.0;
+/// Every profile window is searched for a deeper root unless the whole mission's constant has a σ
+/// within this, seconds (see `Mission::window_search`).
+pub const DEEP_SEARCH_SIGMA_S: f64 = 0.002;
 
 /// The clock model found by the pose fit.
 #[derive(Debug, Clone)]
@@ -231,10 +234,24 @@ impl Mission<'_, '_> {
             lever,
             scale,
             &|t| shape.value(theta, t),
-            WINDOW_SEARCH_S,
+            self.window_search(),
         );
         let profile = calibrated_profile(consistent_windows(raw), &self.profile_windows)?;
         Some(self.decide(profile, (lever, scale, theta[0]), steps))
+    }
+
+    /// How the profile's windows are searched: every window for a deeper root than the one it
+    /// settled at, unless the whole mission's constant fit pins Δt within [`DEEP_SEARCH_SIGMA_S`]
+    /// — windows that agree that well have none in another basin (a step or a first look without
+    /// a lever leaves the constant's jackknife σ at 9–28 ms on the missions where a window hid
+    /// one), and a long clean mission then pays nothing for the search.
+    fn window_search(&self) -> WindowSearch {
+        match &self.whole {
+            Some(w) if w.theta_sigma[0] <= DEEP_SEARCH_SIGMA_S => {
+                WindowSearch::Failed(WINDOW_SEARCH_S)
+            }
+            _ => WindowSearch::Every(WINDOW_SEARCH_S),
+        }
     }
 
     /// The model chosen from `profile` (measured with `lever` held, at the mission's scale and
