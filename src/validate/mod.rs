@@ -507,8 +507,8 @@ fn drift_rows(out: &mut String, grades: &[MissionGrade]) {
             g.drift_true_ppm,
             g.model.map_or("-", |m| m.as_str()),
             g.drift_ppm.map_or("-".into(), |d| format!(
-                "{d:+.1} ± {:.1} ({:+.1})",
-                g.drift_sigma_ppm.unwrap_or(f64::NAN),
+                "{d:+.1} ± {} ({:+.1})",
+                g.drift_sigma_ppm.map_or("-".into(), |s| format!("{s:.1}")),
                 d - g.drift_true_ppm
             )),
             g.drift_resolution_ppm

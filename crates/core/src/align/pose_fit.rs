@@ -51,10 +51,11 @@
 //! (docs/evidence.md).
 //!
 //! Each window's own Δt (the offset profile, [`profile`]) comes from the same fit with D held and one
-//! θ per window, refined from the clock's value at the window and then searched within ±3 s for a
-//! deeper root (`WindowSolver::deeper`): a window started on the wrong side of a clock step, or in a
-//! first look without a lever, can settle at a root of its own a few hundred milliseconds off, as
-//! sharp as the right one.
+//! θ per window, refined from the clock's value at the window and, where the mission's constant is
+//! uncertain beyond 2 ms ([`WindowSearch::Every`], see `align::pose_model`), searched within ±3 s
+//! for a deeper root (`WindowSolver::deeper`): a window started on the wrong side of a clock step,
+//! or in a first look without a lever, can settle at a root of its own a few hundred milliseconds
+//! off, as sharp as the right one.
 //!
 //! A window's σ is its least-squares error σ̂_k/√H_k (σ̂_k² = its residual per degree of freedom)
 //! times one factor f for the mission, from the windows' scatter about the line through their
@@ -106,8 +107,9 @@ const OUTLIER_RMS_FACTOR: f64 = 4.0;
 /// How much lower (in χ² of the window's own noise) a profile window's residual must be at the root
 /// its search finds than at the root nearest its start for the search's to be taken (5σ).
 const SEARCH_CHI2: f64 = 25.0;
-/// A window's search compares its residual on about this many of its reference samples (evenly
-/// spread; the root it finds is then refined on all of them).
+/// A window's search compares its residual on every ⌊n/SEARCH_POINTS⌋-th of its n reference
+/// samples (this many to twice as many; all of a window of fewer), and the root it finds is then
+/// refined on all of them. A stretch between jumps counts [`MIN_SEGMENT_SAMPLES`] of those taken.
 const SEARCH_POINTS: usize = 32;
 /// The spacing of a window's search over offsets, seconds.
 const SEARCH_STEP_S: f64 = 0.05;
@@ -361,6 +363,23 @@ fn segment_terms(pts: Vec<Pt>, shape: &ClockShape, with_lever: bool, s_bar: f64)
     })
 }
 
+/// `pts` (in time order) cut into the stretches of the estimate between jumps they fall in, those of
+/// fewer than [`MIN_SEGMENT_SAMPLES`] points left out (their similarity and drift are 8 parameters).
+fn stretches(pts: Vec<Pt>) -> Vec<Vec<Pt>> {
+    let mut out: Vec<Vec<Pt>> = Vec::new();
+    let mut rest = pts.into_iter().peekable();
+    while let Some(first) = rest.next() {
+        let mut run = vec![first];
+        while let Some(q) = rest.next_if(|q| q.seg == run[0].seg) {
+            run.push(q);
+        }
+        if run.len() >= MIN_SEGMENT_SAMPLES {
+            out.push(run);
+        }
+    }
+    out
+}
+
 impl Problem<'_> {
     /// The reduced normal equations of window `w` for the clock `shape`/`theta` (its parameters
     /// first) and, when `with_lever`, the lever D (the last three); `d` is the lever used either way.
@@ -384,15 +403,7 @@ impl Problem<'_> {
         // A jump of the estimate within the window: each stretch between jumps its own similarity
         // and drift, their reduced equations summed (the stretches share only θ and D).
         let mut total: Option<Terms> = None;
-        let mut rest = pts.into_iter().peekable();
-        while let Some(first) = rest.next() {
-            let mut run = vec![first];
-            while let Some(q) = rest.next_if(|q| q.seg == run[0].seg) {
-                run.push(q);
-            }
-            if run.len() < MIN_SEGMENT_SAMPLES {
-                continue;
-            }
+        for run in stretches(pts) {
             let Some(t) = segment_terms(run, shape, with_lever, s_bar) else {
                 continue;
             };
@@ -406,7 +417,7 @@ impl Problem<'_> {
 
     /// Window `w`'s residual at the constant offset `offset_s` with the lever `d`: the mean squared
     /// residual per point once each stretch's similarity is fitted (scale held about `s_bar`; no
-    /// heading drift), metres², on about [`SEARCH_POINTS`] of its samples. What a search over
+    /// heading drift), metres², on [`SEARCH_POINTS`] to twice as many of its samples. What a search over
     /// offsets compares: one interpolation per point instead of [`Problem::points`]'s five, and no
     /// normal equations. `None` with fewer than [`MIN_WINDOW_SAMPLES`] points.
     fn mean_square_m2(
@@ -441,15 +452,7 @@ impl Problem<'_> {
             });
         }
         let (mut rss, mut n) = (0.0, 0usize);
-        let mut rest = pts.into_iter().peekable();
-        while let Some(first) = rest.next() {
-            let mut run = vec![first];
-            while let Some(q) = rest.next_if(|q| q.seg == run[0].seg) {
-                run.push(q);
-            }
-            if run.len() < MIN_SEGMENT_SAMPLES {
-                continue;
-            }
+        for run in stretches(pts) {
             let win = WindowPoints::new(run);
             rss += win.similarity_rss(s_bar);
             n += win.pts.len();
@@ -532,8 +535,13 @@ impl WindowPoints {
     /// The scale given Σ r̃·R·ũ (`tr`) and Σ|ũ|² (`s_uu`), held about the mission's `s_bar` by its
     /// prior (weight n·[`SCALE_PRIOR_M`]²).
     fn scale_of(&self, tr: f64, s_uu: f64, s_bar: f64) -> f64 {
-        let lambda = self.nf * SCALE_PRIOR_M * SCALE_PRIOR_M;
+        let lambda = self.scale_prior_m2();
         ((tr + lambda * s_bar) / (s_uu + lambda)).max(1e-3)
+    }
+
+    /// The scale prior's weight λ = n·[`SCALE_PRIOR_M`]², m².
+    fn scale_prior_m2(&self) -> f64 {
+        self.nf * SCALE_PRIOR_M * SCALE_PRIOR_M
     }
 
     /// Σ|p_ref − r̄ − s·R·(u − ū)|² under the similarity alone (no heading drift): the residual a
@@ -585,7 +593,7 @@ impl WindowPoints {
     /// increments give the drift a basis). The scale is held to the mission's `s_bar` by its prior.
     fn nuisance(&self, s_bar: f64) -> Nuisance {
         let nf = self.nf;
-        let lambda = nf * SCALE_PRIOR_M * SCALE_PRIOR_M;
+        let lambda = self.scale_prior_m2();
         let scale_of = |tr: f64, s_uu: f64| self.scale_of(tr, s_uu, s_bar);
         let (mut rot, mut tr, mut s_uu) = self.similarity(&|i| self.pts[i].u - self.ubar_m);
         // The estimate's heading drifting within the window at a rate b about its vertical: its
@@ -1639,30 +1647,26 @@ impl WindowOffset {
     }
 }
 
-/// Which profile windows are searched beyond their refinement from the start, and how far
-/// (seconds each way).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Which profile windows are searched beyond their refinement from the start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WindowSearch {
     /// Only a window that fails from its start or leaves a residual far above the others'.
-    Failed(f64),
+    Failed,
     /// Every window as well, for a deeper root than the one it settled at
     /// (`WindowSolver::deeper`).
-    Every(f64),
+    Every,
 }
 
 /// Each window's own Δt with the lever `lever` held, started from `start(t)` and searched as
-/// `search` says. Windows that do not converge are left out.
+/// `search` says, within ±`search_s` of its start. Windows that do not converge are left out.
 pub fn profile(
     data: &PoseData<'_>,
     windows: &[Window],
     lever: Vector3<f64>,
     (scale, c): (f64, f64),
     start: &(dyn Fn(f64) -> f64 + Sync),
-    search: WindowSearch,
+    (search, search_s): (WindowSearch, f64),
 ) -> Vec<WindowOffset> {
-    let search_s = match search {
-        WindowSearch::Failed(s) | WindowSearch::Every(s) => s,
-    };
     let solver = WindowSolver {
         problem: data.problem(),
         lever_m: lever,
@@ -1675,8 +1679,8 @@ pub fn profile(
             let t0 = start(w.t());
             let refined = solver.refine(w, t0)?;
             Some(match search {
-                WindowSearch::Failed(_) => refined,
-                WindowSearch::Every(_) => solver.deeper(w, refined, t0, search_s),
+                WindowSearch::Failed => refined,
+                WindowSearch::Every => solver.deeper(w, refined, t0, search_s),
             })
         })
         .collect();
@@ -1787,20 +1791,26 @@ impl WindowSolver<'_> {
     /// window then hides the step, or a constant that is not the clock's.
     fn deeper(&self, w: &Window, refined: (f64, Terms), t0_s: f64, search_s: f64) -> (f64, Terms) {
         let dof = refined.1.dof() - 1.0;
-        let Some(best) = self.search_start(w, t0_s, search_s) else {
-            return refined;
-        };
-        if dof <= 0.0 || (best - refined.0).abs() <= SEARCH_STEP_S {
+        if dof <= 0.0 {
             return refined;
         }
-        // Per point: a root that leaves a few of the window's samples uninterpolated is not
-        // deeper for their absence.
-        let mean_square = |t: &Terms| t.rss / t.n as f64;
-        let noise = refined.1.rss / dof;
-        match self.refine(w, best) {
+        let Some(best_s) = self.search_start(w, t0_s, search_s) else {
+            return refined;
+        };
+        if (best_s - refined.0).abs() <= SEARCH_STEP_S {
+            return refined;
+        }
+        // Per point, on as many stretches and nearly as many points: a root that leaves some of
+        // the window's samples uninterpolated, or splits it at a jump (each stretch its own
+        // similarity soaking up residual), is not deeper for that.
+        let mean_square_m2 = |t: &Terms| t.rss / t.n as f64;
+        let noise_m2 = refined.1.rss / dof;
+        match self.refine(w, best_s) {
             Some(s)
-                if (mean_square(&refined.1) - mean_square(&s.1)) * refined.1.n as f64
-                    > SEARCH_CHI2 * noise =>
+                if s.1.segments == refined.1.segments
+                    && 10 * s.1.n >= 9 * refined.1.n
+                    && (mean_square_m2(&refined.1) - mean_square_m2(&s.1)) * refined.1.n as f64
+                        > SEARCH_CHI2 * noise_m2 =>
             {
                 s
             }
@@ -1816,6 +1826,9 @@ impl WindowSolver<'_> {
 
     /// The offset of least residual every [`SEARCH_STEP_S`] within ±`search_s` of `t0_s`.
     fn search_start(&self, w: &Window, t0_s: f64, search_s: f64) -> Option<f64> {
+        if !search_s.is_finite() {
+            return None;
+        }
         let steps = (search_s / SEARCH_STEP_S).round() as i64;
         (-steps..=steps)
             .filter_map(|k| {

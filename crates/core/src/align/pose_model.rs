@@ -4,7 +4,8 @@
 //! 1. **Whole mission.** One Δt and the lever D fitted over every window ([`pose_fit::fit`]), from the
 //!    offset the signal searches found; windows whose fit leaves a residual far above the others (a
 //!    jump of the estimate inside them) are left out.
-//! 2. **Profile.** Each window's own Δt with D held ([`pose_fit::profile`]), its σ the window's
+//! 2. **Profile.** Each window's own Δt with D held ([`pose_fit::profile`]; searched ±3 s for a
+//!    deeper root where the whole mission's constant is uncertain beyond 2 ms), its σ the window's
 //!    least-squares error scaled by the scatter of the windows about their neighbours
 //!    ([`pose_fit::scatter_factor`]): model-free for a constant clock and a linear drift alike.
 //! 3. **Model.** [`crate::align::clock_model::choose_model`] over the profile: a drift or a step only
@@ -38,8 +39,8 @@ pub const MAX_DISAGREEMENT_S: f64 = 0.3;
 /// The step of the coarse search for a start when the fit from the signal search's answer does not
 /// converge, seconds (the fit converged from 34–100 ms off where it stalled from 64–218 ms).
 pub const COARSE_STEP_S: f64 = 0.025;
-/// Each window of the profile searches this far around the whole mission's Δt when its own
-/// refinement fails (a clock step), seconds.
+/// Each window of the profile searches this far around its start when its own refinement fails (a
+/// clock step), or for a deeper root (see `Mission::window_search`), seconds.
 pub const WINDOW_SEARCH_S: f64 = 3.0;
 /// Every profile window is searched for a deeper root unless the whole mission's constant has a σ
 /// within this, seconds (see `Mission::window_search`).
@@ -234,7 +235,7 @@ impl Mission<'_, '_> {
             lever,
             scale,
             &|t| shape.value(theta, t),
-            self.window_search(),
+            (self.window_search(), WINDOW_SEARCH_S),
         );
         let profile = calibrated_profile(consistent_windows(raw), &self.profile_windows)?;
         Some(self.decide(profile, (lever, scale, theta[0]), steps))
@@ -247,10 +248,8 @@ impl Mission<'_, '_> {
     /// one), and a long clean mission then pays nothing for the search.
     fn window_search(&self) -> WindowSearch {
         match &self.whole {
-            Some(w) if w.theta_sigma[0] <= DEEP_SEARCH_SIGMA_S => {
-                WindowSearch::Failed(WINDOW_SEARCH_S)
-            }
-            _ => WindowSearch::Every(WINDOW_SEARCH_S),
+            Some(w) if w.theta_sigma[0] <= DEEP_SEARCH_SIGMA_S => WindowSearch::Failed,
+            _ => WindowSearch::Every,
         }
     }
 
