@@ -1461,11 +1461,8 @@ impl SharedFit<'_> {
         c: f64,
     ) -> Option<DMatrix<f64>> {
         let (h, j, _) = self.summed(terms, d, l, c);
-        let (rss, dof) = terms
-            .iter()
-            .flatten()
-            .fold((0.0, 0.0), |(r, f), t| (r + t.rss, f + t.dof()));
-        let dof = dof - self.p as f64;
+        let (rss, _) = residual_sums(terms);
+        let dof = terms.iter().flatten().map(Terms::dof).sum::<f64>() - self.p as f64;
         if dof <= 0.0 {
             return None;
         }
