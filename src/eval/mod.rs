@@ -450,6 +450,17 @@ fn searched_offset(
         Some(Ok(o)) => weak_offset(config, est, Some(&o), searched),
         _ => weak_offset(config, est, None, searched),
     };
+    // The signal searches' lever warnings say "measure the lever": the pose fit did, and the Δt it
+    // applies does not rest on their lead. They stand where it could not tell a forward lever from
+    // Δt (its σ then carries that) or did not run; the reason keeps what the searches saw.
+    if report.fitted_forward_separable == Some(true) {
+        warnings.retain(|w| {
+            !matches!(
+                w.code,
+                WarningCode::LeverArmSuspected | WarningCode::LeverArmUnchecked
+            )
+        });
+    }
     warnings.extend(w);
     Ok((report, warnings))
 }
