@@ -43,6 +43,17 @@ fn reduced_validation_holds_the_calibration() {
     // No false clock alarm, no huge σ on a small error.
     assert_eq!(c.clock_alarms, 0, "{summary}");
     assert_eq!(c.sigma_too_large, 0, "{summary}");
+    // A clean constant clock finishes without a warning (exit 0): the pose fit measured the lever
+    // the signal searches suspected.
+    for g in &constant {
+        assert!(
+            g.warnings.is_empty(),
+            "{} {}: {:?}",
+            g.kind,
+            g.seed,
+            g.warnings
+        );
+    }
     assert!(c.error_p50_s <= 0.003, "{summary}");
     assert!(c.error_max_s <= 0.015, "{summary}");
     // The headline σ: 21 missions, so looser than the acceptance's 85–98 % and [0.4, 1.2].
