@@ -421,12 +421,7 @@ fn build(
     let mut warnings: Vec<Warning> = evaluation
         .warnings
         .iter()
-        .filter(|w| {
-            !matches!(
-                w.code,
-                WarningCode::LeverArmSuspected | WarningCode::LeverArmUnchecked
-            )
-        })
+        .filter(|w| !w.code.is_lever())
         .cloned()
         .collect();
     let (mut out_of_line, missing) = clock_findings(sources, clocks, evaluations);

@@ -452,14 +452,10 @@ fn searched_offset(
     };
     // The signal searches' lever warnings say "measure the lever": the pose fit did, and the Δt it
     // applies does not rest on their lead. They stand where it could not tell a forward lever from
-    // Δt (its σ then carries that) or did not run; the reason keeps what the searches saw.
+    // Δt (its σ then carries that), or did not run or converge; the reason keeps what the searches
+    // saw.
     if report.fitted_forward_separable == Some(true) {
-        warnings.retain(|w| {
-            !matches!(
-                w.code,
-                WarningCode::LeverArmSuspected | WarningCode::LeverArmUnchecked
-            )
-        });
+        warnings.retain(|w| !w.code.is_lever());
     }
     warnings.extend(w);
     Ok((report, warnings))

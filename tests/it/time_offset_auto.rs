@@ -194,14 +194,7 @@ fn turns_in_place_do_not_fake_a_lever_arm() {
         ("legged", true),
     ] {
         let dir = mission(&shared, m);
-        let lever_warned = |rep: &Report| {
-            rep.warnings.iter().any(|w| {
-                matches!(
-                    w.code,
-                    WarningCode::LeverArmSuspected | WarningCode::LeverArmUnchecked
-                )
-            })
-        };
+        let lever_warned = |rep: &Report| rep.warnings.iter().any(|w| w.code.is_lever());
         let mut c = EvalConfig::new(
             Some(dir.join("mission.mcap")),
             NamedInput::topic("/reference/position"),

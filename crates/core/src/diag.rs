@@ -38,6 +38,15 @@ impl WarningCode {
             WarningCode::ClockClosureFailed => "clock_closure_failed",
         }
     }
+
+    /// The signal searches' lever warnings (`lever_arm_suspected`, `lever_arm_unchecked`): moot once
+    /// the lever is measured (by the pose fit, or by the audit's lever report).
+    pub fn is_lever(self) -> bool {
+        matches!(
+            self,
+            WarningCode::LeverArmSuspected | WarningCode::LeverArmUnchecked
+        )
+    }
 }
 
 impl std::fmt::Display for WarningCode {
