@@ -199,6 +199,12 @@ struct Fit {
     sigma_b: f64,
 }
 
+/// The σ of one constant over `profile`'s usable windows (their calibrated σ combined, each stretch
+/// of the mission counted once); `None` without a usable window.
+pub fn profile_constant_sigma_s(profile: &OffsetProfile) -> Option<f64> {
+    fit(&profile.usable(), 0.0, false, profile.redundancy()).map(|c| c.sigma_a)
+}
+
 /// Weighted least squares of y = a + b·(t − t0) (`linear`) or y = a, with capped χ².
 fn fit(w: &[ProfileWindow], t0: f64, linear: bool, rho: f64) -> Option<Fit> {
     let (mut s, mut st, mut stt, mut sy, mut sty) = (0.0, 0.0, 0.0, 0.0, 0.0);
