@@ -199,10 +199,27 @@ struct Fit {
     sigma_b: f64,
 }
 
-/// The σ of one constant over `profile`'s usable windows (their calibrated σ combined, each stretch
-/// of the mission counted once); `None` without a usable window.
-pub fn profile_constant_sigma_s(profile: &OffsetProfile) -> Option<f64> {
-    fit(&profile.usable(), 0.0, false, profile.redundancy()).map(|c| c.sigma_a)
+/// The σ of one offset over `profile`'s usable windows wholly inside `span` (reference seconds):
+/// their calibrated σ combined, each stretch of the mission counted once, without the signal
+/// searches' floor; `None` without such a window.
+pub fn windows_offset_sigma_s(profile: &OffsetProfile, span: (f64, f64)) -> Option<f64> {
+    let w = inside(&profile.usable(), span, 0.5 * profile.window_s);
+    fit(&w, 0.0, false, profile.redundancy()).map(|c| c.sigma_a)
+}
+
+/// The σ at `t_mid` of the line through `profile`'s usable windows (as
+/// [`windows_offset_sigma_s`]); `None` with fewer than two.
+pub fn windows_line_sigma_s(profile: &OffsetProfile, t_mid: f64) -> Option<f64> {
+    fit(&profile.usable(), t_mid, true, profile.redundancy()).map(|l| l.sigma_a)
+}
+
+/// The windows of `w` (each `half` a window either side of its centre) wholly inside `span`: those
+/// straddling a change of the clock mix both offsets.
+fn inside(w: &[ProfileWindow], (lo, hi): (f64, f64), half: f64) -> Vec<ProfileWindow> {
+    w.iter()
+        .copied()
+        .filter(|p| p.t - half >= lo - 1e-9 && p.t + half <= hi + 1e-9)
+        .collect()
 }
 
 /// Weighted least squares of y = a + b·(t − t0) (`linear`) or y = a, with capped χ².
@@ -562,13 +579,7 @@ fn piecewise_segments(
         .windows(2)
         .enumerate()
         .map(|(k, x)| {
-            // Windows wholly inside the segment; those straddling a change mix both offsets.
-            let inside: Vec<ProfileWindow> = w
-                .iter()
-                .copied()
-                .filter(|p| p.t - half >= x[0] - 1e-9 && p.t + half <= x[1] + 1e-9)
-                .collect();
-            let f = fit(&inside, 0.0, false, rho).or_else(|| {
+            let f = fit(&inside(w, (x[0], x[1]), half), 0.0, false, rho).or_else(|| {
                 let lo = b[k];
                 let hi = b[k + 1];
                 fit(&w[lo..hi], 0.0, false, rho)

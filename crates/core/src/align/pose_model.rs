@@ -15,10 +15,10 @@
 //!    segment) fitted again with D over every window, and their σ the jackknife over windows, at
 //!    least the formal σ (see [`crate::align::pose_fit`]) and at least what the profile's windows
 //!    give for the same parameter (their calibrated σ combined, D held: the fit with D free cannot
-//!    be surer). The jackknife over 8–30 windows is itself uncertain; this floor kept a lucky
-//!    jackknife from claiming more than the windows show (docs/evidence.md: on the validation it
-//!    raised a σ on a quarter of the missions, moved no Δt, and brought the declared drifts' and
-//!    the steps' 2σ coverage from 90 and 92 % to 93 and 96.5 %).
+//!    be surer; the signal searches' 2 ms floor is not theirs). The jackknife over 8–30 windows is
+//!    itself uncertain; this floor keeps a lucky jackknife from claiming more than the windows show
+//!    (docs/evidence.md: on the validation it raised a σ on one mission in eight, moved no Δt, and
+//!    brought the declared drifts' 2σ coverage from 90 to 93 %).
 //!
 //! A constant clock whose drift the data cannot resolve could still hide one below the resolution:
 //! the constant's σ then adds the part of the measured drift beyond its own noise,
@@ -28,8 +28,8 @@
 use nalgebra::Vector3;
 
 use crate::align::clock_model::{
-    choose_model, locate_change, profile_constant_sigma_s, ClockModel, ClockSegment, OffsetModel,
-    Steps,
+    choose_model, locate_change, windows_line_sigma_s, windows_offset_sigma_s, ClockModel,
+    ClockSegment, OffsetModel, Steps,
 };
 use crate::align::offset_profile::{OffsetProfile, ProfileParams, ProfileWindow};
 use crate::align::pose_fit::{self, ClockShape, PoseData, PoseFit, WindowSearch};
@@ -398,13 +398,14 @@ fn set_parameters(model: &mut ClockModel, last: &PoseFit, profile: &OffsetProfil
                 }
                 _ => 0.0,
             };
-            let floor = profile_constant_sigma_s(profile).unwrap_or(f64::NAN);
-            model.sigma_s = (sigma(0, floor).powi(2) + hidden * hidden).sqrt();
+            let floor = windows_offset_sigma_s(profile, (f64::NEG_INFINITY, f64::INFINITY));
+            model.sigma_s = (sigma(0, floor.unwrap_or(f64::NAN)).powi(2) + hidden * hidden).sqrt();
         }
         OffsetModel::Linear => {
-            // `choose_model` left the profile line's σ of the offset and of the drift.
+            // `choose_model` left the drift's σ from the profile's line.
             model.offset_s = last.theta[0];
-            model.sigma_s = sigma(0, model.sigma_s);
+            let floor = windows_line_sigma_s(profile, model.t_mid);
+            model.sigma_s = sigma(0, floor.unwrap_or(f64::NAN));
             model.drift_ppm = Some(-last.theta[1] * 1e6);
             let floor = model
                 .drift_sigma_ppm
@@ -413,11 +414,11 @@ fn set_parameters(model: &mut ClockModel, last: &PoseFit, profile: &OffsetProfil
             model.drift_sigma_ppm = Some(last.theta_sigma[1].max(floor) * 1e6);
         }
         OffsetModel::Piecewise => {
-            // `choose_model` left each segment's σ from the windows wholly inside it.
             for (k, s) in model.segments.iter_mut().enumerate() {
+                let floor = windows_offset_sigma_s(profile, (s.t_start, s.t_end));
                 *s = ClockSegment {
                     offset_s: last.theta[k],
-                    sigma_s: sigma(k, s.sigma_s),
+                    sigma_s: sigma(k, floor.unwrap_or(f64::NAN)),
                     ..*s
                 };
             }
