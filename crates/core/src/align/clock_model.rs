@@ -202,6 +202,39 @@ struct Fit {
 /// The σ of one offset over `profile`'s usable windows wholly inside `span` (reference seconds):
 /// their calibrated σ combined, each stretch of the mission counted once, without the signal
 /// searches' floor; `None` without such a window.
+///
+/// ```
+/// use trajdrift_core::align::clock_model::{windows_line_sigma_s, windows_offset_sigma_s};
+/// use trajdrift_core::align::offset_profile::{OffsetProfile, ProfileWindow};
+/// use trajdrift_core::align::time_offset::OffsetMethod;
+/// // Four disjoint 20 s windows, each Δt ± 2 ms.
+/// let window = |t: f64| ProfileWindow {
+///     t,
+///     offset_s: 0.1,
+///     sigma_s: 0.002,
+///     correlation: 1.0,
+///     usable: true,
+/// };
+/// let mut profile = OffsetProfile {
+///     method: OffsetMethod::Pose,
+///     window_s: 20.0,
+///     step_s: 20.0,
+///     sigma_scale: 1.0,
+///     windows: [10.0, 30.0, 50.0, 70.0].map(window).to_vec(),
+/// };
+/// let all = (f64::NEG_INFINITY, f64::INFINITY);
+/// let close = |a: Option<f64>, b: f64| (a.unwrap() - b).abs() < 1e-12;
+/// assert!(close(windows_offset_sigma_s(&profile, all), 0.001)); // 2 ms / √4
+/// // A segment from 0 to 45 s holds the first two wholly (the third straddles 45 s).
+/// assert!(close(windows_offset_sigma_s(&profile, (0.0, 45.0)), 0.002 / 2f64.sqrt()));
+/// assert_eq!(windows_offset_sigma_s(&profile, (0.0, 15.0)), None);
+/// // The line's offset at the windows' centre is as sure as their mean.
+/// assert!(close(windows_line_sigma_s(&profile, 40.0), 0.001));
+/// // Windows every 10 s overlap by half: each stretch counts once, the σ is not halved again.
+/// profile.step_s = 10.0;
+/// profile.windows = (0..7).map(|k| window(10.0 + 10.0 * k as f64)).collect();
+/// assert!(close(windows_offset_sigma_s(&profile, all), 0.002 * (2.0 / 7.0f64).sqrt()));
+/// ```
 pub fn windows_offset_sigma_s(profile: &OffsetProfile, span: (f64, f64)) -> Option<f64> {
     let w = inside(&profile.usable(), span, 0.5 * profile.window_s);
     fit(&w, 0.0, false, profile.redundancy()).map(|c| c.sigma_a)
