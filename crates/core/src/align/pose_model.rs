@@ -379,13 +379,9 @@ impl Mission<'_, '_> {
 /// cannot beat). The constant's σ also covers the drift it may hide (see the module doc); the
 /// piecewise model's headline is its longest segment's.
 fn set_parameters(model: &mut ClockModel, last: &PoseFit, profile: &OffsetProfile) {
-    let sigma = |k: usize, floor_s: f64| {
+    let sigma = |k: usize, floor_s: Option<f64>| {
         let s = last.theta_sigma[k].max(POSE_SIGMA_FLOOR_S);
-        if floor_s.is_finite() {
-            s.max(floor_s)
-        } else {
-            s
-        }
+        floor_s.map_or(s, |f| s.max(f))
     };
     match model.model {
         OffsetModel::Constant => {
@@ -399,13 +395,13 @@ fn set_parameters(model: &mut ClockModel, last: &PoseFit, profile: &OffsetProfil
                 _ => 0.0,
             };
             let floor = windows_offset_sigma_s(profile, (f64::NEG_INFINITY, f64::INFINITY));
-            model.sigma_s = (sigma(0, floor.unwrap_or(f64::NAN)).powi(2) + hidden * hidden).sqrt();
+            model.sigma_s = (sigma(0, floor).powi(2) + hidden * hidden).sqrt();
         }
         OffsetModel::Linear => {
             // `choose_model` left the drift's σ from the profile's line.
             model.offset_s = last.theta[0];
             let floor = windows_line_sigma_s(profile, model.t_mid);
-            model.sigma_s = sigma(0, floor.unwrap_or(f64::NAN));
+            model.sigma_s = sigma(0, floor);
             model.drift_ppm = Some(-last.theta[1] * 1e6);
             let floor = model
                 .drift_sigma_ppm
@@ -418,7 +414,7 @@ fn set_parameters(model: &mut ClockModel, last: &PoseFit, profile: &OffsetProfil
                 let floor = windows_offset_sigma_s(profile, (s.t_start, s.t_end));
                 *s = ClockSegment {
                     offset_s: last.theta[k],
-                    sigma_s: sigma(k, floor.unwrap_or(f64::NAN)),
+                    sigma_s: sigma(k, floor),
                     ..*s
                 };
             }
