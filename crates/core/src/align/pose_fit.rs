@@ -1145,7 +1145,7 @@ const COARSE_LEVER_STEPS: usize = 6;
 const COARSE_LEVER_TOLERANCE_M: f64 = 1e-3;
 
 /// The offset among `start_s` ± `span_s` (every `step_s`) at which the windows fit best, the lever
-/// solved at each candidate (Newton steps from none until it settles, [`COARSE_LEVER_STEPS`] at
+/// solved at each candidate (Newton steps from none until it settles, six at
 /// most), by the residual per point: a start for [`fit`] when the one it was given lies outside
 /// the basin (the estimating equations have no root between there and the truth: on two
 /// validation missions the fit stalled 111 ms off, or ran away, from a start 218 and 64 ms off, and
