@@ -200,8 +200,9 @@ struct Fit {
 }
 
 /// The σ of one offset over `profile`'s usable windows wholly inside `span` (reference seconds):
-/// their calibrated σ combined, each stretch of the mission counted once, without the signal
-/// searches' floor; `None` without such a window.
+/// their calibrated σ combined, each stretch of the mission counted once, raised by their scatter
+/// about that offset where it exceeds their σ (the Birge ratio, as the drift's σ and a step's
+/// sides), without the signal searches' floor; `None` without such a window.
 ///
 /// ```
 /// use trajdrift_core::align::clock_model::{windows_line_sigma_s, windows_offset_sigma_s};
@@ -237,13 +238,14 @@ struct Fit {
 /// ```
 pub fn windows_offset_sigma_s(profile: &OffsetProfile, span: (f64, f64)) -> Option<f64> {
     let w = inside(&profile.usable(), span, 0.5 * profile.window_s);
-    fit(&w, 0.0, false, profile.redundancy()).map(|c| c.sigma_a)
+    fit(&w, 0.0, false, profile.redundancy()).map(|c| c.sigma_a * c.birge(w.len(), 1))
 }
 
 /// The σ at `t_mid` of the line through `profile`'s usable windows (as
-/// [`windows_offset_sigma_s`]); `None` with fewer than two.
+/// [`windows_offset_sigma_s`], the scatter taken about the line); `None` with fewer than two.
 pub fn windows_line_sigma_s(profile: &OffsetProfile, t_mid: f64) -> Option<f64> {
-    fit(&profile.usable(), t_mid, true, profile.redundancy()).map(|l| l.sigma_a)
+    let w = profile.usable();
+    fit(&w, t_mid, true, profile.redundancy()).map(|l| l.sigma_a * l.birge(w.len(), 2))
 }
 
 /// The windows of `w` (each `half` a window either side of its centre) wholly inside `span`: those
@@ -311,8 +313,14 @@ impl Fit {
     /// σ of the constant, raised by the windows' scatter about it where that exceeds their σ (the
     /// Birge ratio over `len` windows).
     fn scattered_sigma_a(&self, len: usize) -> f64 {
-        let dof = (len as f64 - 1.0).max(1.0);
-        self.sigma_a * (self.chi2 / dof).sqrt().max(1.0)
+        self.sigma_a * self.birge(len, 1)
+    }
+
+    /// The Birge ratio √(χ²/dof) over `len` windows and `k` parameters, at least 1: how much the
+    /// windows scatter about the fit beyond their σ (ρ cancels: χ² and dof are both counted ρ times).
+    fn birge(&self, len: usize, k: usize) -> f64 {
+        let dof = (len as f64 - k as f64).max(1.0);
+        (self.chi2 / dof).sqrt().max(1.0)
     }
 }
 
@@ -424,7 +432,7 @@ pub fn choose_model(
         n_eff,
         window_s: profile.window_s,
     };
-    let drift = fits.drift_ppm(rho);
+    let drift = fits.drift_ppm();
     let z = criterion_z(n_eff);
     let resolution = drift.map(|d| SLOW_ERROR_FACTOR * z * d.1);
     let chosen = match (forced, criterion.choice(), drift, resolution) {
@@ -543,12 +551,9 @@ impl Fits<'_> {
 
     /// The linear fit's drift and its σ, ppm (positive: the estimate's clock runs fast): the σ from
     /// the windows' σ, raised by the scatter about the line where it exceeds them.
-    fn drift_ppm(&self, rho: f64) -> Option<(f64, f64)> {
-        self.linear.map(|l| {
-            let dof = (self.windows.len() as f64 - 2.0).max(1.0);
-            let birge = (l.chi2 / rho / (dof / rho)).sqrt().max(1.0);
-            (-l.b * 1e6, l.sigma_b * 1e6 * birge)
-        })
+    fn drift_ppm(&self) -> Option<(f64, f64)> {
+        self.linear
+            .map(|l| (-l.b * 1e6, l.sigma_b * 1e6 * l.birge(self.windows.len(), 2)))
     }
 }
 

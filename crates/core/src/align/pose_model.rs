@@ -14,8 +14,8 @@
 //! 4. **Final fit.** The chosen model's parameters (constant; offset and drift; one offset per
 //!    segment) fitted again with D over every window, and their σ the jackknife over windows, at
 //!    least the formal σ (see [`crate::align::pose_fit`]) and at least what the profile's windows
-//!    give for the same parameter (their calibrated σ combined, D held: the fit with D free cannot
-//!    be surer; the signal searches' 2 ms floor is not theirs). The jackknife over 8–30 windows is
+//!    give for the same parameter (their calibrated σ combined and raised by their scatter about it,
+//!    D held: the fit with D free cannot be surer; the signal searches' 2 ms floor is not theirs). The jackknife over 8–30 windows is
 //!    itself uncertain; this floor keeps a lucky jackknife from claiming more than the windows show
 //!    (docs/evidence.md: on the validation it raised a σ on one mission in eight, moved no Δt, and
 //!    brought the declared drifts' 2σ coverage from 90 to 93 %).
@@ -375,8 +375,8 @@ impl Mission<'_, '_> {
 
 /// Step 4: `model`'s parameters and their σ from its fit `last` (σ at least
 /// [`POSE_SIGMA_FLOOR_S`]), each σ at least what the profile's windows give for it (their calibrated
-/// σ combined, with the lever held: what the model was chosen on, which the fit with the lever free
-/// cannot beat). The constant's σ also covers the drift it may hide (see the module doc); the
+/// σ combined and raised by their scatter, with the lever held: what the model was chosen on, which
+/// the fit with the lever free cannot beat). The constant's σ also covers the drift it may hide (see the module doc); the
 /// piecewise model's headline is its longest segment's.
 fn set_parameters(model: &mut ClockModel, last: &PoseFit, profile: &OffsetProfile) {
     let sigma = |k: usize, floor_s: Option<f64>| {
@@ -567,4 +567,123 @@ fn time_spread(p: &OffsetProfile) -> f64 {
     }
     let m = st / s;
     (stt / s - m * m).max(0.0).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::DMatrix;
+
+    /// Four disjoint 20 s windows at 10, 30, 50, 70 s, each `offset(t)` ± 2 ms.
+    fn profile(offset: impl Fn(f64) -> f64) -> OffsetProfile {
+        OffsetProfile {
+            method: OffsetMethod::Pose,
+            window_s: 20.0,
+            step_s: 20.0,
+            sigma_scale: 1.0,
+            windows: [10.0, 30.0, 50.0, 70.0]
+                .map(|t| ProfileWindow {
+                    t,
+                    offset_s: offset(t),
+                    sigma_s: 0.002,
+                    correlation: 1.0,
+                    usable: true,
+                })
+                .to_vec(),
+        }
+    }
+
+    /// A converged final fit with parameters `theta` and their σ `sigma`.
+    fn fit(shape: ClockShape, theta: Vec<f64>, sigma: Vec<f64>) -> PoseFit {
+        let n = theta.len();
+        PoseFit {
+            shape,
+            theta,
+            lever_m: Vector3::zeros(),
+            theta_sigma: sigma,
+            lever_sigma_m: None,
+            covariance: DMatrix::zeros(n, n),
+            variance_inflation: 1.0,
+            windows: Vec::new(),
+            outliers: Vec::new(),
+            rms_m: Vec::new(),
+            scale: 1.0,
+            jacobian_scale: 1.0,
+            iterations: 1,
+            converged: true,
+        }
+    }
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() < 1e-12
+    }
+
+    #[test]
+    fn a_lucky_jackknife_is_raised_to_the_windows_and_a_wide_one_kept() {
+        let p = profile(|_| 0.1);
+        let constant = || ClockModel::constant(0.0, 0.0, String::new());
+        // The four windows combine to 2 ms / √4 = 1 ms: a jackknife of 0.3 ms is raised to it.
+        let mut m = constant();
+        set_parameters(
+            &mut m,
+            &fit(ClockShape::Constant, vec![0.1], vec![3e-4]),
+            &p,
+        );
+        assert!(close(m.offset_s, 0.1) && close(m.sigma_s, 0.001), "{m:?}");
+        // A jackknife wider than the windows stands.
+        let mut m = constant();
+        set_parameters(
+            &mut m,
+            &fit(ClockShape::Constant, vec![0.1], vec![0.005]),
+            &p,
+        );
+        assert!(close(m.sigma_s, 0.005));
+        // Windows scattering ±4 ms about the offset with σ 2 ms: the floor grows by the Birge ratio
+        // √(χ²/dof) = √(4·4/3).
+        let scattered = profile(|t| {
+            if t < 20.0 || (40.0..60.0).contains(&t) {
+                0.104
+            } else {
+                0.096
+            }
+        });
+        let mut m = constant();
+        set_parameters(
+            &mut m,
+            &fit(ClockShape::Constant, vec![0.1], vec![3e-4]),
+            &scattered,
+        );
+        assert!(close(m.sigma_s, 0.001 * (16.0f64 / 3.0).sqrt()), "{m:?}");
+    }
+
+    #[test]
+    fn a_line_keeps_the_drifts_floor_and_states_it_in_ppm() {
+        let p = profile(|t| 0.1 - 50e-6 * (t - 40.0));
+        let mut m = ClockModel {
+            model: OffsetModel::Linear,
+            t_mid: 40.0,
+            drift_ppm: Some(50.0),
+            drift_sigma_ppm: Some(3.0),
+            ..ClockModel::constant(0.1, 0.0, String::new())
+        };
+        let shape = ClockShape::Linear { t_mid: 40.0 };
+        // θ₁ = −48·10⁻⁶ s/s is a clock running 48 ppm fast; its σ of 1 ppm is raised to the
+        // profile line's 3 ppm, and the offset's 0.2 ms to the line's at t_mid (1 ms).
+        set_parameters(
+            &mut m,
+            &fit(shape.clone(), vec![0.1, -48e-6], vec![2e-4, 1e-6]),
+            &p,
+        );
+        assert!(close(m.drift_ppm.unwrap(), 48.0));
+        assert!(close(m.drift_sigma_ppm.unwrap(), 3.0));
+        assert!(close(m.sigma_s, 0.001), "{m:?}");
+        // A wider final fit stands.
+        m.drift_sigma_ppm = Some(3.0);
+        set_parameters(
+            &mut m,
+            &fit(shape, vec![0.1, -48e-6], vec![0.004, 5e-6]),
+            &p,
+        );
+        assert!(close(m.drift_sigma_ppm.unwrap(), 5.0) && close(m.sigma_s, 0.004));
+    }
 }
