@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use trajdrift::decode::ros1;
-use trajdrift::decode::ros2_msgs::{Header, Odometry, Point, PointStamped, Time};
+use trajdrift::decode::ros2_msgs::{Header, Odometry, Point, PointStamped, PoseStamped, Time};
 use trajdrift::simulate::writer::write_mcap;
 use trajdrift::simulate::{default_route, simulate, MissionConfig};
 use trajdrift::sources::bag::writer::{BagCompression, BagWriter};
@@ -27,34 +27,110 @@ pub fn small_mcap(path: &Path, n: usize) {
 
 /// A ROS 1 bag of `n` reference points and `n` odometry messages, in `compression`.
 pub fn small_bag(path: &Path, compression: BagCompression, n: u32) {
-    let f = std::fs::File::create(path).unwrap();
-    let mut w = BagWriter::new(std::io::BufWriter::new(f), compression, 1024).unwrap();
-    let r = w.add_connection("/reference/position", "geometry_msgs/PointStamped");
-    let e = w.add_connection("/estimate/odom", "nav_msgs/Odometry");
-    for i in 0..n {
-        let ns = 1_700_000_000_000_000_000 + i as i64 * 100_000_000;
-        let header = Header {
-            stamp: Time::from_ns(ns),
-            frame_id: "map".into(),
-        };
-        let point = Point {
-            x: i as f64 * 0.1,
-            y: (i as f64 * 0.1).sin(),
-            z: 0.5,
-        };
-        let ps = PointStamped {
-            header: header.clone(),
-            point,
-        };
-        w.write(r, ns as u64, &ros1::encode_point_stamped(i, &ps))
-            .unwrap();
-        let mut o = Odometry {
-            header,
-            ..Default::default()
-        };
-        o.pose.pose.position = point;
-        w.write(e, ns as u64, &ros1::encode_odometry(i, &o))
-            .unwrap();
+    BagShape {
+        compression,
+        n,
+        ..BagShape::default()
     }
-    w.finish().unwrap();
+    .write(path);
+}
+
+/// How an estimate's topic is written in a [`BagShape`].
+#[derive(Clone, Copy, Debug)]
+pub enum EstimateMsg {
+    Odometry,
+    Pose,
+}
+
+/// A small ROS 1 bag: the reference's points along x = 0.1·i, y = sin(`wave`·i), z = `z_m`, one
+/// every `period_ns`, and each estimate topic holding the same positions (the one bag writer of the
+/// tests).
+#[derive(Clone, Debug)]
+pub struct BagShape<'a> {
+    pub compression: BagCompression,
+    pub n: u32,
+    pub period_ns: i64,
+    pub wave: f64,
+    pub z_m: f64,
+    pub chunk_bytes: usize,
+    pub estimates: &'a [(&'a str, EstimateMsg)],
+}
+
+impl Default for BagShape<'_> {
+    fn default() -> Self {
+        BagShape {
+            compression: BagCompression::None,
+            n: 50,
+            period_ns: 100_000_000,
+            wave: 0.1,
+            z_m: 0.5,
+            chunk_bytes: 1024,
+            estimates: &[("/estimate/odom", EstimateMsg::Odometry)],
+        }
+    }
+}
+
+impl BagShape<'_> {
+    /// Writes the bag to `path`.
+    pub fn write(&self, path: &Path) {
+        let f = std::fs::File::create(path).unwrap();
+        let mut w = BagWriter::new(
+            std::io::BufWriter::new(f),
+            self.compression.clone(),
+            self.chunk_bytes,
+        )
+        .unwrap();
+        let r = w.add_connection("/reference/position", "geometry_msgs/PointStamped");
+        let estimates: Vec<(u32, EstimateMsg)> = self
+            .estimates
+            .iter()
+            .map(|&(topic, kind)| {
+                let ty = match kind {
+                    EstimateMsg::Odometry => "nav_msgs/Odometry",
+                    EstimateMsg::Pose => "geometry_msgs/PoseStamped",
+                };
+                (w.add_connection(topic, ty), kind)
+            })
+            .collect();
+        for i in 0..self.n {
+            let ns = 1_700_000_000_000_000_000 + i as i64 * self.period_ns;
+            let header = Header {
+                stamp: Time::from_ns(ns),
+                frame_id: "map".into(),
+            };
+            let point = Point {
+                x: i as f64 * 0.1,
+                y: (i as f64 * self.wave).sin(),
+                z: self.z_m,
+            };
+            let ps = PointStamped {
+                header: header.clone(),
+                point,
+            };
+            w.write(r, ns as u64, &ros1::encode_point_stamped(i, &ps))
+                .unwrap();
+            for &(c, kind) in &estimates {
+                let bytes = match kind {
+                    EstimateMsg::Odometry => {
+                        let mut o = Odometry {
+                            header: header.clone(),
+                            ..Default::default()
+                        };
+                        o.pose.pose.position = point;
+                        ros1::encode_odometry(i, &o)
+                    }
+                    EstimateMsg::Pose => {
+                        let mut pose = PoseStamped {
+                            header: header.clone(),
+                            ..Default::default()
+                        };
+                        pose.pose.position = point;
+                        ros1::encode_pose_stamped(i, &pose)
+                    }
+                };
+                w.write(c, ns as u64, &bytes).unwrap();
+            }
+        }
+        w.finish().unwrap();
+    }
 }

@@ -6,6 +6,8 @@
 
 use std::path::Path;
 
+use crate::hostile_support::EstimateMsg;
+
 use crate::robust_support::{
     eval_args, expect_code, mkfifo, run, s, stderr, stdout, Fixture, Snapshot,
 };
@@ -264,44 +266,16 @@ fn names_that_map_to_one_file_or_channel_are_refused() {
     // Topics that differ only by `/` and `_` name their estimates apart by default.
     let dir = tempfile::tempdir().unwrap();
     let bag = dir.path().join("odom.bag");
-    {
-        use trajdrift::decode::ros1;
-        use trajdrift::decode::ros2_msgs::{Header, Odometry, Point, PointStamped, Time};
-        use trajdrift::sources::bag::writer::{BagCompression, BagWriter};
-        let file = std::fs::File::create(&bag).unwrap();
-        let mut w =
-            BagWriter::new(std::io::BufWriter::new(file), BagCompression::None, 4096).unwrap();
-        let r = w.add_connection("/reference/position", "geometry_msgs/PointStamped");
-        let a = w.add_connection("/odom/filtered", "nav_msgs/Odometry");
-        let b = w.add_connection("/odom_filtered", "nav_msgs/Odometry");
-        for i in 0..50u32 {
-            let ns = 1_700_000_000_000_000_000 + i as i64 * 100_000_000;
-            let header = Header {
-                stamp: Time::from_ns(ns),
-                frame_id: "map".into(),
-            };
-            let point = Point {
-                x: i as f64 * 0.1,
-                y: (i as f64 * 0.1).sin(),
-                z: 0.0,
-            };
-            let ps = PointStamped {
-                header: header.clone(),
-                point,
-            };
-            w.write(r, ns as u64, &ros1::encode_point_stamped(i, &ps))
-                .unwrap();
-            let mut o = Odometry {
-                header,
-                ..Default::default()
-            };
-            o.pose.pose.position = point;
-            let bytes = ros1::encode_odometry(i, &o);
-            w.write(a, ns as u64, &bytes).unwrap();
-            w.write(b, ns as u64, &bytes).unwrap();
-        }
-        w.finish().unwrap();
+    crate::hostile_support::BagShape {
+        z_m: 0.0,
+        chunk_bytes: 4096,
+        estimates: &[
+            ("/odom/filtered", EstimateMsg::Odometry),
+            ("/odom_filtered", EstimateMsg::Odometry),
+        ],
+        ..Default::default()
     }
+    .write(&bag);
     let o = run(&[
         "eval",
         s(&bag),

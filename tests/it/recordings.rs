@@ -2,14 +2,13 @@
 //! ROS 1 in MCAP, rosbag2 folders (mcap and sqlite3), plus the evo data counts and the errors.
 
 use crate::common;
+use crate::hostile_support::{BagShape, EstimateMsg};
 
 use std::path::{Path, PathBuf};
 
-use trajdrift::decode::ros1;
-use trajdrift::decode::ros2_msgs::{Header, Odometry, Point, PointStamped, PoseStamped, Time};
 use trajdrift::evaluate;
 use trajdrift::params::Platform;
-use trajdrift::sources::bag::writer::{BagCompression, BagWriter};
+use trajdrift::sources::bag::writer::BagCompression;
 use trajdrift::sources::{open, ExtractOptions, Extraction};
 use trajdrift::{EvalConfig, NamedInput};
 
@@ -122,46 +121,21 @@ fn evo_data_counts() {
     assert!(counts(&nav2).contains(&("/tf".to_string(), 5422)));
 }
 
-/// A small ROS 1 bag with a reference and an estimate, in `compression`.
+/// A small ROS 1 bag with a reference and an estimate (odometry and pose), in `compression`.
 fn write_bag(path: &Path, compression: BagCompression, n: u32) {
-    let f = std::fs::File::create(path).unwrap();
-    let mut w = BagWriter::new(std::io::BufWriter::new(f), compression, 4096).unwrap();
-    let r = w.add_connection("/reference/position", "geometry_msgs/PointStamped");
-    let e = w.add_connection("/estimate/odom", "nav_msgs/Odometry");
-    let p = w.add_connection("/estimate/pose", "geometry_msgs/PoseStamped");
-    for i in 0..n {
-        let ns = 1_700_000_000_000_000_000 + i as i64 * 10_000_000;
-        let header = Header {
-            stamp: Time::from_ns(ns),
-            frame_id: "map".into(),
-        };
-        let point = Point {
-            x: i as f64 * 0.1,
-            y: (i as f64 * 0.01).sin(),
-            z: 0.5,
-        };
-        let ps = PointStamped {
-            header: header.clone(),
-            point,
-        };
-        w.write(r, ns as u64, &ros1::encode_point_stamped(i, &ps))
-            .unwrap();
-        let mut o = Odometry {
-            header: header.clone(),
-            ..Default::default()
-        };
-        o.pose.pose.position = point;
-        w.write(e, ns as u64, &ros1::encode_odometry(i, &o))
-            .unwrap();
-        let mut pose = PoseStamped {
-            header,
-            ..Default::default()
-        };
-        pose.pose.position = point;
-        w.write(p, ns as u64, &ros1::encode_pose_stamped(i, &pose))
-            .unwrap();
+    BagShape {
+        compression,
+        n,
+        period_ns: 10_000_000,
+        wave: 0.01,
+        chunk_bytes: 4096,
+        estimates: &[
+            ("/estimate/odom", EstimateMsg::Odometry),
+            ("/estimate/pose", EstimateMsg::Pose),
+        ],
+        ..Default::default()
     }
-    w.finish().unwrap();
+    .write(path);
 }
 
 #[test]
