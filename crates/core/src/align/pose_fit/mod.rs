@@ -1,0 +1,247 @@
+//! The pose fit: the clock offset from the positions themselves, with the estimate's lever arm
+//! fitted alongside, and an error bar taken from the spread of the mission's own windows.
+//!
+//! **Why.** Speed and curvature compare one number per instant. A walking robot's speed hardly
+//! changes, and a sensor mounted ahead of the reference point sees every curve early, so those
+//! signals leave tens of milliseconds on legged missions. The positions carry more: where the robot
+//! is, not only how fast it goes or how sharply it turns. When the estimate has an orientation R̂ (its
+//! body's attitude), the reference point it corresponds to is the estimate's position less its lever,
+//! ê − R̂·D, whatever the robot does — turning in place, rolling with its gait, tilting on a slope.
+//!
+//! **Model.** The reference clock's time t of the reference sample p_ref(t) meets the estimate at
+//! t − Δt(t) of its own clock. The mission is cut into windows of [`WINDOW_S`] seconds (at least
+//! [`MIN_WINDOW_SAMPLES`] reference samples each); in window k
+//!
+//! p_ref(t) ≈ s_k·R_k·(ê(t − Δt(t)) − R̂(t − Δt(t))·D) + T_k,
+//!
+//! with the window's own similarity (rotation R_k ∈ SO(3), scale s_k, translation T_k: the estimate's
+//! frame, its drift and its scale error, which odometry accumulates slowly) and, shared by every
+//! window, the lever D (the estimate's sensor relative to the reference's point, in the estimate's
+//! body frame) and the clock Δt(t) = Σ θ_m·φ_m(t) (constant, linear or piecewise, [`ClockShape`]). ê
+//! and R̂ are interpolated linearly between the estimate's samples (gaps longer than the largest gap
+//! are not bridged). Where the estimate jumps ([`crate::align::jumps`]: a localiser correcting
+//! itself), each side of the jump within a window has its own similarity and drift (the sides share
+//! only θ and D), and the points whose interpolation would reach across the jump are left out. A
+//! window's scale is held to the mission's by a prior worth [`SCALE_PRIOR_M`] of spread per sample, so a window that stands or turns in place (whose positions barely spread)
+//! keeps the mission's scale and still pins D: its reference stands still while ê sweeps the lever's
+//! arc. The similarity of each window has a closed form (Umeyama: an SVD of the 3×3 cross-covariance);
+//! θ and D are found by Gauss–Newton on the normal equations reduced by each window's similarity
+//! (the Schur complement of the full system), from the offset `auto` found.
+//!
+//! **What it cannot see.** At constant speed a sensor D_x ahead is, to first order, the same sensor
+//! D_x/v later: Δt and a forward lever are then inseparable. The fit says so: [`PoseFit::inseparable`]
+//! compares Δt's error with the lever fitted and with it held (the variance inflation); the lever and
+//! Δt are told apart by speed changes, stops, turns in place and the second-order chord-versus-arc
+//! difference of curves.
+//!
+//! **Error bar: the spread of independent windows.** The windows do not overlap, and the noise of one
+//! (reference noise, the estimate's drift and jitter, the gait, a model error) is nearly independent
+//! of the next's. The standard error of every fitted parameter is the delete-one-window jackknife of
+//! the whole fit, lever included: each window left out in turn (one Newton step of the reduced normal
+//! equations from the full solution), variance (K−1)/K·Σ(θ₋ₖ − θ̄)². It assumes nothing about the
+//! residual — not whiteness, not its size — only that windows err independently; it is honest for the
+//! same reason a bootstrap is, and it includes the lever's uncertainty, which moves every window
+//! alike. What no spread can show is an error common to every window of the mission (a latency the
+//! recorder adds to every stamp is, by definition, part of the offset). With the 8–30 windows of a
+//! mission the jackknife's variance is itself uncertain (by 25–50 %), and where it falls short the
+//! error is several of its σ; so each parameter's σ is at least its formal one, J⁻¹·σ̂²H·J⁻ᵀ with σ̂²
+//! the residual per degree of freedom — what the residuals would give were they white, the least the
+//! noise allows (on white noise it is the spread of the answers: a test draws the noise 40 times). On
+//! the validation's 1399 constant clocks this halved the errors beyond 3σ (39 → 20) and moved no Δt
+//! (docs/evidence.md).
+//!
+//! Each window's own Δt (the offset profile, [`profile`](fn@profile)) comes from the same fit with D held and one
+//! θ per window, refined from the clock's value at the window and, where the mission's constant is
+//! uncertain beyond 2 ms ([`WindowSearch::Every`], see `align::pose_model`), searched within ±3 s
+//! for a deeper root (`WindowSolver::deeper`): a window started on the wrong side of a clock step,
+//! or in a first look without a lever, can settle at a root of its own a few hundred milliseconds
+//! off, as sharp as the right one.
+//!
+//! A window's σ is its least-squares error σ̂_k/√H_k (σ̂_k² = its residual per degree of freedom)
+//! times one factor f for the mission, from the windows' scatter about the line through their
+//! neighbours: e_k = Δt_k − (interpolation of Δt_{k−1} and Δt_{k+1} at t_k) is free of any constant
+//! and any linear drift, so under honest σ each e_k/σ(e_k) is a unit normal; f² is the mean of those
+//! squares with the ones beyond 4σ set aside ([`CLIP_CHI2`]: a step, which spoils two, does not
+//! decide it). This is what makes a drift or a step, judged against the windows' σ, a claim the
+//! data support (see [`crate::align::clock_model`]).
+
+use nalgebra::{DMatrix, UnitQuaternion, Vector3};
+
+mod profile;
+mod shared;
+#[cfg(test)]
+mod tests;
+mod window;
+
+pub use profile::{profile, scatter_factor, WindowOffset, WindowSearch};
+pub use shared::{coarse_start, fit};
+pub use window::{locate_change, windows, Window};
+
+/// Length of a window, seconds (a window holds at least [`MIN_WINDOW_SAMPLES`] reference samples:
+/// longer at low reference rates).
+pub const WINDOW_S: f64 = 20.0;
+/// The fewest reference samples in a window.
+pub const MIN_WINDOW_SAMPLES: usize = 20;
+/// A window's scale follows its own data only as far as its positions spread more than this per
+/// sample, metres (the prior's weight is n·SCALE_PRIOR_M²).
+pub const SCALE_PRIOR_M: f64 = 1.0;
+/// A window's heading drift rate follows its own data only as far as they determine it better than
+/// this prior: σ 10⁻³ rad/s (0.06°/s) against 2 cm of noise per sample (weight n·(0.02/10⁻³)² m²s²).
+pub const DRIFT_PRIOR_M2S2: f64 = 400.0;
+/// Prior σ of each lever component, metres (keeps a lever the data cannot see at 0).
+pub const LEVER_PRIOR_M: f64 = 1.0;
+/// A window's squared scatter beyond this many (squared) σ of the current factor is set aside when
+/// the profile's scale factor is estimated (4σ).
+pub const CLIP_CHI2: f64 = 16.0;
+/// The variance inflation of Δt by the lever above which the two are called inseparable.
+pub const INSEPARABLE_VIF: f64 = 25.0;
+
+/// The estimate's poses: times on its own clock (seconds from the common origin), positions and
+/// orientations (body to its frame), and where it jumps ([`crate::align::jumps::jumps`] of `t` and
+/// `p`: found once per track, the fits ask many times).
+#[derive(Clone, Copy)]
+pub struct PoseTrack<'a> {
+    pub t: &'a [f64],
+    pub p: &'a [Vector3<f64>],
+    pub q: &'a [UnitQuaternion<f64>],
+    pub jumps: &'a [(f64, f64)],
+}
+
+/// The shape of Δt(t) = Σ θ_m·φ_m(t), t on the reference clock.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ClockShape {
+    /// θ₀.
+    Constant,
+    /// θ₀ + θ₁·(t − t_mid).
+    Linear { t_mid: f64 },
+    /// θ_m on the m-th stretch between the change times (sorted).
+    Piecewise { changes: Vec<f64> },
+}
+
+impl ClockShape {
+    /// The number of parameters.
+    pub fn len(&self) -> usize {
+        match self {
+            ClockShape::Constant => 1,
+            ClockShape::Linear { .. } => 2,
+            ClockShape::Piecewise { changes } => changes.len() + 1,
+        }
+    }
+
+    /// Never empty (a shape has at least one parameter).
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// φ(t) into `out` (length [`Self::len`]).
+    fn basis(&self, t: f64, out: &mut [f64]) {
+        match self {
+            ClockShape::Constant => out[0] = 1.0,
+            ClockShape::Linear { t_mid } => {
+                out[0] = 1.0;
+                out[1] = t - t_mid;
+            }
+            ClockShape::Piecewise { changes } => {
+                out.iter_mut().for_each(|v| *v = 0.0);
+                out[changes.partition_point(|&c| c <= t)] = 1.0;
+            }
+        }
+    }
+
+    /// Δt(t) for parameters θ.
+    pub fn value(&self, theta: &[f64], t: f64) -> f64 {
+        match self {
+            ClockShape::Constant => theta[0],
+            ClockShape::Linear { t_mid } => theta[0] + theta[1] * (t - t_mid),
+            ClockShape::Piecewise { changes } => theta[changes.partition_point(|&c| c <= t)],
+        }
+    }
+}
+
+/// The result of a fit of the shared parameters.
+#[derive(Debug, Clone)]
+pub struct PoseFit {
+    pub shape: ClockShape,
+    /// The clock's parameters θ (seconds; a linear slope in s/s).
+    pub theta: Vec<f64>,
+    /// The lever D, estimate body frame, metres (zero when not fitted).
+    pub lever_m: Vector3<f64>,
+    /// Standard errors of θ and of D (D's when fitted): the jackknife's, at least the formal ones.
+    pub theta_sigma: Vec<f64>,
+    pub lever_sigma_m: Option<Vector3<f64>>,
+    /// The covariance of (θ, D): the jackknife's, each variance raised to at least the formal one.
+    pub covariance: DMatrix<f64>,
+    /// Δt's error with the lever fitted over Δt's error with it held, squared (θ₀; 1 without lever).
+    pub variance_inflation: f64,
+    /// The windows used, and the ones left out as outliers (their residual RMS).
+    pub windows: Vec<Window>,
+    pub outliers: Vec<Window>,
+    /// Residual RMS per used window, metres.
+    pub rms_m: Vec<f64>,
+    /// The mission's scale (estimate distances over reference distances, ≈ 1 + scale error).
+    pub scale: f64,
+    /// The secant correction of the Jacobian's clock columns (see `solve`); the profile's windows
+    /// use it too.
+    pub jacobian_scale: f64,
+    pub iterations: usize,
+    pub converged: bool,
+}
+
+impl PoseFit {
+    /// Whether Δt and the lever are too entangled to tell apart (constant speed, no turns in place):
+    /// Δt's variance grows by more than [`INSEPARABLE_VIF`] when the lever is fitted.
+    pub fn inseparable(&self) -> bool {
+        self.variance_inflation > INSEPARABLE_VIF
+    }
+}
+
+/// Settings of a fit.
+#[derive(Debug, Clone, Copy)]
+pub struct PoseFitParams {
+    /// The largest gap of the estimate interpolated across, seconds.
+    pub max_gap_s: f64,
+    /// The window length (`None`: [`WINDOW_S`], longer at low reference rates).
+    pub window_s: Option<f64>,
+}
+
+/// The reference, the estimate's poses and the settings of one mission's fits.
+pub struct PoseData<'a> {
+    pub ref_t: &'a [f64],
+    pub ref_p: &'a [Vector3<f64>],
+    pub estimate: PoseTrack<'a>,
+    pub params: PoseFitParams,
+}
+
+impl<'a> PoseData<'a> {
+    /// The windows of this mission.
+    pub fn windows(&self) -> Vec<Window> {
+        windows(self.ref_t, self.params.window_s)
+    }
+
+    /// The profile's windows: those of [`Self::windows`] (disjoint), or with `step_s` shorter than
+    /// their length, windows of the same length every `step_s` seconds (overlapping).
+    pub fn profile_windows(&self, step_s: Option<f64>) -> Vec<Window> {
+        let disjoint = self.windows();
+        let (Some(step), Some(first), Some(last)) = (step_s, disjoint.first(), disjoint.last())
+        else {
+            return disjoint;
+        };
+        let len = first.t_end - first.t_start;
+        if step >= len {
+            return disjoint;
+        }
+        let (a, b) = (first.t_start, last.t_end);
+        let count = ((b - a - len) / step).floor().max(0.0) as usize + 1;
+        (0..count)
+            .map(|k| {
+                let (lo, hi) = (a + k as f64 * step, (a + k as f64 * step + len).min(b));
+                Window {
+                    range: self.ref_t.partition_point(|&t| t < lo)
+                        ..self.ref_t.partition_point(|&t| t < hi),
+                    t_start: lo,
+                    t_end: hi,
+                }
+            })
+            .collect()
+    }
+}

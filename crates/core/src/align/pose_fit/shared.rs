@@ -1,0 +1,560 @@
+//! The whole-mission fit: the parameters every window shares (the clock's θ and the lever D), by
+//! Gauss–Newton on the windows' reduced equations summed ([`fit`], [`solve`], [`SharedFit`]), with
+//! the error bar of the module doc (the delete-one-window jackknife, floored by the formal σ), and
+//! [`coarse_start`], a search for a start when the one given lies outside the basin. Kept apart
+//! from `window.rs` (which builds each window's equations) and `profile.rs` (which solves one
+//! window at a time) because its unknowns are common to every window: each step sums them all.
+
+use nalgebra::{DMatrix, DVector, Vector3};
+use rayon::prelude::*;
+
+use super::window::{Problem, Terms, Window};
+use super::{ClockShape, PoseData, PoseFit, LEVER_PRIOR_M};
+
+/// Gauss–Newton iterations at most. Most fits stop within ten; on a few legged missions Δt and a
+/// forward lever trade places for tens of iterations before they settle (20 left 3 of 1200
+/// validation missions unconverged, and their signal-search fallback 26–75 ms off with σ of
+/// hundreds of ms). The cost is only paid where the fit needs it.
+pub(super) const MAX_ITERATIONS: usize = 60;
+/// The largest change of an offset parameter in one iteration, seconds.
+pub(super) const MAX_STEP_S: f64 = 0.1;
+/// A window whose residual RMS exceeds this many times the median window's is left out (what the
+/// jump finder missed: a jump too small to find, an estimate that goes astray for a while).
+pub(super) const OUTLIER_RMS_FACTOR: f64 = 4.0;
+
+/// Fits the clock `shape` (from `theta0`) and, when `with_lever`, the lever (from `lever0`) over
+/// `windows`; windows whose residual RMS is an outlier are left out and the fit repeated.
+pub fn fit(
+    data: &PoseData<'_>,
+    windows: &[Window],
+    shape: ClockShape,
+    theta0: Vec<f64>,
+    lever0: Vector3<f64>,
+    with_lever: bool,
+) -> Option<PoseFit> {
+    let problem = data.problem();
+    // Windows whose residual at the start is an outlier already (a jump of the estimate in them)
+    // are left out before the first fit, so that they cannot drag it.
+    let at_start: Vec<Option<f64>> = windows
+        .par_iter()
+        .map(|w| {
+            problem
+                .terms(w, &shape, &theta0, &lever0, false, 1.0)
+                .map(|t| t.rms_m())
+        })
+        .collect();
+    let mut rms: Vec<f64> = at_start.iter().flatten().copied().collect();
+    rms.sort_by(f64::total_cmp);
+    let median = rms.get(rms.len() / 2).copied().unwrap_or(f64::INFINITY);
+    let (mut kept, mut outliers): (Vec<Window>, Vec<Window>) = (Vec::new(), Vec::new());
+    for (w, r) in windows.iter().zip(&at_start) {
+        match r {
+            Some(r) if *r > OUTLIER_RMS_FACTOR * median => outliers.push(w.clone()),
+            _ => kept.push(w.clone()),
+        }
+    }
+    if kept.len() < 3 {
+        kept = windows.to_vec();
+        outliers.clear();
+    }
+    let (mut theta, mut lever) = (theta0, lever0);
+    for _round in 0..3 {
+        let mut f = solve(&problem, &kept, &shape, theta.clone(), lever, with_lever)?;
+        let mut rms = f.rms_m.clone();
+        rms.sort_by(f64::total_cmp);
+        let median = rms[rms.len() / 2];
+        type Scored = Vec<(Window, f64)>;
+        let (bad, good): (Scored, Scored) = f
+            .windows
+            .iter()
+            .cloned()
+            .zip(f.rms_m.iter().copied())
+            .partition(|(_, r)| *r > OUTLIER_RMS_FACTOR * median);
+        if bad.is_empty() || good.len() < 3 {
+            f.outliers = outliers;
+            return Some(f);
+        }
+        outliers.extend(bad.into_iter().map(|(w, _)| w));
+        kept = good.into_iter().map(|(w, _)| w).collect();
+        theta = f.theta;
+        lever = f.lever_m;
+    }
+    let mut f = solve(&problem, &kept, &shape, theta, lever, with_lever)?;
+    f.outliers = outliers;
+    Some(f)
+}
+
+/// Newton steps of the lever at each candidate of [`coarse_start`] at most: the windows' similarities
+/// move with the lever, so one step from none leaves it far off where the robot turns in place.
+const COARSE_LEVER_STEPS: usize = 6;
+/// A lever step below this ends [`coarse_start`]'s lever iterations, metres.
+const COARSE_LEVER_TOLERANCE_M: f64 = 1e-3;
+
+/// The offset among `start_s` ± `span_s` (every `step_s`) at which the windows fit best, the lever
+/// solved at each candidate (Newton steps from none until it settles, six at
+/// most), by the residual per point: a start for [`fit`] when the one it was given lies outside
+/// the basin (the estimating equations have no root between there and the truth: on two
+/// validation missions the fit stalled 111 ms off, or ran away, from a start 218 and 64 ms off, and
+/// converged from within 100 and 34 ms). With a single lever step the residual of a robot turning
+/// in place fell steadily away from the truth (the lever left at half its length), and the best
+/// candidate was the search's edge, 0.36 s off; settled, it is 11 ms off and the fit converges.
+/// `None` when no candidate has windows.
+pub fn coarse_start(
+    data: &PoseData<'_>,
+    windows: &[Window],
+    start_s: f64,
+    (span_s, step_s): (f64, f64),
+) -> Option<f64> {
+    let problem = data.problem();
+    let shape = ClockShape::Constant;
+    let fit = SharedFit {
+        problem: &problem,
+        windows,
+        shape: &shape,
+        with_lever: true,
+        m: 1,
+        p: 4,
+    };
+    let k = (span_s / step_s).round() as i64;
+    (-k..=k)
+        .filter_map(|i| {
+            let theta = [start_s + i as f64 * step_s];
+            let mut lever = Vector3::zeros();
+            let mut terms = fit.eval(&theta, &lever, 1.0);
+            for _ in 0..COARSE_LEVER_STEPS {
+                let (_, j, g) = fit.summed(&terms, &lever, lever_weight(&terms), 1.0);
+                let Some(step) = j
+                    .view((1, 1), (3, 3))
+                    .into_owned()
+                    .lu()
+                    .solve(&g.rows(1, 3).into_owned())
+                else {
+                    break;
+                };
+                let step = Vector3::new(step[0], step[1], step[2]);
+                lever -= step;
+                terms = fit.eval(&theta, &lever, 1.0);
+                if step.norm() < COARSE_LEVER_TOLERANCE_M {
+                    break;
+                }
+            }
+            let (rss, n) = residual_sums(&terms);
+            (n > 0).then(|| (theta[0], rss / n as f64))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|best| best.0)
+}
+
+/// Gauss–Newton with backtracking over the shared parameters, then the jackknife.
+pub(super) fn solve(
+    problem: &Problem<'_>,
+    windows: &[Window],
+    shape: &ClockShape,
+    theta0: Vec<f64>,
+    lever0: Vector3<f64>,
+    with_lever: bool,
+) -> Option<PoseFit> {
+    let m = shape.len();
+    let fit = SharedFit {
+        problem,
+        windows,
+        shape,
+        with_lever,
+        m,
+        p: m + if with_lever { 3 } else { 0 },
+    };
+    let mut x = fit.start(theta0, lever0)?;
+    let iterations = fit.gauss_newton(&mut x)?;
+    fit.finish(x, iterations)
+}
+
+/// The fit of the parameters every window shares over `windows`: the clock `shape`'s `m` (first)
+/// and, when `with_lever`, the lever's three (of `p` in all).
+pub(super) struct SharedFit<'a> {
+    pub(super) problem: &'a Problem<'a>,
+    pub(super) windows: &'a [Window],
+    pub(super) shape: &'a ClockShape,
+    pub(super) with_lever: bool,
+    pub(super) m: usize,
+    pub(super) p: usize,
+}
+
+/// Gauss–Newton's iterate: the shared parameters, the windows' reduced equations at them, and what
+/// steers the steps.
+struct Iterate {
+    /// The clock's parameters θ (seconds; a linear slope in s/s).
+    theta: Vec<f64>,
+    /// The lever D, estimate body frame.
+    lever_m: Vector3<f64>,
+    /// Each window's reduced equations at θ, D and the mission's scale (`None`: too few points).
+    terms: Vec<Option<Terms>>,
+    /// The mission's scale s̄, the centre of the windows' scale priors.
+    scale: f64,
+    /// The secant correction c of the Jacobian's clock columns.
+    jacobian_scale: f64,
+    /// The Levenberg–Marquardt damping λ.
+    damping: f64,
+}
+
+impl SharedFit<'_> {
+    /// The windows' reduced equations at the clock `theta`, the lever `d` and the mission's scale
+    /// `s_bar`.
+    pub(super) fn eval(&self, theta: &[f64], d: &Vector3<f64>, s_bar: f64) -> Vec<Option<Terms>> {
+        self.windows
+            .par_iter()
+            .map(|w| {
+                self.problem
+                    .terms(w, self.shape, theta, d, self.with_lever, s_bar)
+            })
+            .collect()
+    }
+
+    /// The iterate at the start (the mission's scale 1); `None` with fewer than three windows.
+    fn start(&self, theta0: Vec<f64>, lever0: Vector3<f64>) -> Option<Iterate> {
+        let s_bar = 1.0;
+        let terms = self.eval(&theta0, &lever0, s_bar);
+        if terms.iter().flatten().count() < 3 {
+            return None;
+        }
+        Some(Iterate {
+            theta: theta0,
+            lever_m: lever0,
+            terms,
+            scale: s_bar,
+            jacobian_scale: 1.0,
+            damping: 1e-3,
+        })
+    }
+
+    /// Gauss–Newton on the estimating equations from `x`, at most [`MAX_ITERATIONS`] steps, until a
+    /// step is small or no damping makes one acceptable: the number of iterations; `None` when the
+    /// summed equations cannot be solved.
+    fn gauss_newton(&self, x: &mut Iterate) -> Option<usize> {
+        let (m, p) = (self.m, self.p);
+        let mut iterations = 0;
+        let mut previous: Option<DVector<f64>> = None;
+        for it in 0..MAX_ITERATIONS {
+            iterations = it + 1;
+            if it < 3 {
+                self.rescale(x);
+            }
+            let l = lever_weight(&x.terms);
+            let (Some(mut step), g0, scales) =
+                self.normal(&x.terms, &x.lever_m, l, x.jacobian_scale, x.damping)
+            else {
+                return None;
+            };
+            // The secant correction, once the lever has settled.
+            if let (true, Some(last)) = (it >= 2, &previous) {
+                self.secant_correction(x, &mut step, last, l);
+            }
+            let before = merit(&g0, &scales);
+            let accepted = self.backtrack(x, &mut step, l, &scales, before);
+            let small = (0..m).all(|k| step[k].abs() < 2e-6)
+                && (!self.with_lever || (m..p).all(|k| step[k].abs() < 2e-5));
+            if !accepted || small {
+                break;
+            }
+            previous = Some(step);
+        }
+        Some(iterations)
+    }
+
+    /// The mission's scale from the windows' evidence (Σ tr over Σ s_uu), the windows' equations
+    /// then re-evaluated with it, so that every step compares like with like. Done in the first
+    /// iterations only.
+    fn rescale(&self, x: &mut Iterate) {
+        let (tr, suu) = x
+            .terms
+            .iter()
+            .flatten()
+            .fold((0.0, 0.0), |(a, b), t| (a + t.tr, b + t.s_uu));
+        if suu > 0.0 && tr > 0.0 && (tr / suu - x.scale).abs() > 1e-6 {
+            x.scale = tr / suu;
+            x.terms = self.eval(&x.theta, &x.lever_m, x.scale);
+        }
+    }
+
+    /// The secant correction c of the Jacobian's clock columns, which are a derivative over a
+    /// wider stencil and miss part of the fast motion (a gait) the residual follows: a clock
+    /// `step` that undoes part of the `last` (ρ < 0, its projection on it) means the Jacobian was
+    /// too small, so c grows by 1 − ρ (within [1, 4]) and `step` is solved again with it.
+    fn secant_correction(
+        &self,
+        x: &mut Iterate,
+        step: &mut DVector<f64>,
+        last: &DVector<f64>,
+        l: f64,
+    ) {
+        let m = self.m;
+        let (new, old) = (step.rows(0, m), last.rows(0, m));
+        let norm = old.dot(&old);
+        let rho = new.dot(&old) / norm;
+        if norm.sqrt() > 1e-5 && rho < 0.0 {
+            x.jacobian_scale = (x.jacobian_scale * (1.0 - rho)).clamp(1.0, 4.0);
+            if let (Some(s), ..) = self.normal(&x.terms, &x.lever_m, l, x.jacobian_scale, x.damping)
+            {
+                *step = s;
+            }
+        }
+    }
+
+    /// Takes `step` (shortened to [`MAX_STEP_S`] on the clock) when it keeps every window and
+    /// lowers the merit of the estimating equations below `before` (the instrument is not the
+    /// cost's exact gradient, so the steps solve g = 0 rather than descend a cost); otherwise ten
+    /// times more damping and a new step, ten tries at most. Whether a step was taken (`step` is
+    /// then the one taken); the damping falls after a success.
+    fn backtrack(
+        &self,
+        x: &mut Iterate,
+        step: &mut DVector<f64>,
+        l: f64,
+        scales: &DVector<f64>,
+        before: f64,
+    ) -> bool {
+        let (m, c) = (self.m, x.jacobian_scale);
+        for _ in 0..10 {
+            let largest = (0..m).map(|k| step[k].abs()).fold(0.0, f64::max);
+            let a = if largest > MAX_STEP_S {
+                MAX_STEP_S / largest
+            } else {
+                1.0
+            };
+            let t2: Vec<f64> = (0..m).map(|k| x.theta[k] + a * step[k]).collect();
+            let d2 = if self.with_lever {
+                x.lever_m + Vector3::new(step[m], step[m + 1], step[m + 2]) * a
+            } else {
+                x.lever_m
+            };
+            let terms2 = self.eval(&t2, &d2, x.scale);
+            if terms2.iter().flatten().count() == x.terms.iter().flatten().count()
+                && merit(&self.normal(&terms2, &d2, l, c, 0.0).1, scales) < before
+            {
+                x.theta = t2;
+                x.lever_m = d2;
+                x.terms = terms2;
+                *step *= a;
+                x.damping = (x.damping / 3.0).max(1e-6);
+                return true;
+            }
+            x.damping *= 10.0;
+            match self.normal(&x.terms, &x.lever_m, l, c, x.damping) {
+                (Some(s), ..) => *step = s,
+                _ => return false,
+            }
+        }
+        false
+    }
+
+    /// The reduced equations summed over the windows with the lever's prior (weight `l`, centred
+    /// on 0, at the lever `d`) added, the Jacobian's clock columns scaled by the secant correction
+    /// `c`: (H, J, g).
+    fn summed(
+        &self,
+        terms: &[Option<Terms>],
+        d: &Vector3<f64>,
+        l: f64,
+        c: f64,
+    ) -> (DMatrix<f64>, DMatrix<f64>, DVector<f64>) {
+        let (m, p) = (self.m, self.p);
+        let (mut h, mut j, mut g) = (
+            DMatrix::<f64>::zeros(p, p),
+            DMatrix::<f64>::zeros(p, p),
+            DVector::<f64>::zeros(p),
+        );
+        for t in terms.iter().flatten() {
+            h += &t.h;
+            j += &t.j;
+            g += &t.g;
+        }
+        if self.with_lever {
+            for c in 0..3 {
+                h[(m + c, m + c)] += l;
+                j[(m + c, m + c)] += l;
+                g[m + c] += l * d[c];
+            }
+        }
+        scale_clock_columns(&mut j, m, c);
+        (h, j, g)
+    }
+
+    /// The damped Newton step −(J + λ·diag(H))⁻¹·g of the summed equations (see [`Self::summed`];
+    /// Levenberg–Marquardt: more λ after a failed step), the gradient g and the merit's scales
+    /// diag(H).
+    fn normal(
+        &self,
+        terms: &[Option<Terms>],
+        d: &Vector3<f64>,
+        l: f64,
+        c: f64,
+        lambda: f64,
+    ) -> (Option<DVector<f64>>, DVector<f64>, DVector<f64>) {
+        let (h, mut j, g) = self.summed(terms, d, l, c);
+        for k in 0..self.p {
+            j[(k, k)] += lambda * h[(k, k)];
+        }
+        let step = j.lu().solve(&g).map(|x| -x);
+        (step, g, h.diagonal())
+    }
+
+    /// The formal covariance J⁻¹·σ̂²H·J⁻ᵀ of the summed equations, σ̂² the residual per degree of
+    /// freedom (white residuals assumed).
+    pub(super) fn formal_covariance(
+        &self,
+        terms: &[Option<Terms>],
+        d: &Vector3<f64>,
+        l: f64,
+        c: f64,
+    ) -> Option<DMatrix<f64>> {
+        let (h, j, _) = self.summed(terms, d, l, c);
+        let (rss, _) = residual_sums(terms);
+        let dof = terms.iter().flatten().map(Terms::dof).sum::<f64>() - self.p as f64;
+        if dof <= 0.0 {
+            return None;
+        }
+        let ji = j.try_inverse()?;
+        Some(&ji * h * ji.transpose() * (rss / dof))
+    }
+
+    /// The delete-one-window jackknife at the solution (see the module doc): each window left out
+    /// by one Newton step of the summed equations less its own; the covariance
+    /// (K−1)/K·Σ(δ₋ₖ − δ̄)(δ₋ₖ − δ̄)ᵀ of those steps, and the summed H (for the variance
+    /// inflation). `None` when fewer than three windows could be left out.
+    fn jackknife(
+        &self,
+        terms: &[Option<Terms>],
+        d: &Vector3<f64>,
+        l: f64,
+        c: f64,
+    ) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
+        let (m, p) = (self.m, self.p);
+        let (h, j, _) = self.summed(terms, d, l, c);
+        let deltas: Vec<DVector<f64>> = terms
+            .iter()
+            .flatten()
+            .filter_map(|t| {
+                let mut tj = t.j.clone();
+                scale_clock_columns(&mut tj, m, c);
+                (&j - tj).lu().solve(&t.g)
+            })
+            .collect();
+        if deltas.len() < 3 {
+            return None;
+        }
+        let kf = deltas.len() as f64;
+        let mean = deltas.iter().fold(DVector::zeros(p), |a, d| a + d) / kf;
+        let mut cov = DMatrix::<f64>::zeros(p, p);
+        for dlt in &deltas {
+            let c = dlt - &mean;
+            cov += &c * c.transpose();
+        }
+        cov *= (kf - 1.0) / kf;
+        Some((cov, h))
+    }
+
+    /// The fit at the solution `x`: the standard errors (the jackknife's, at least the formal
+    /// ones), whether it converged (the Newton step left is small beside them), the variance
+    /// inflation of Δt by the lever.
+    fn finish(&self, x: Iterate, iterations: usize) -> Option<PoseFit> {
+        let (m, p, with_lever) = (self.m, self.p, self.with_lever);
+        let (d, c) = (x.lever_m, x.jacobian_scale);
+        let l = lever_weight(&x.terms);
+        let remaining = self.normal(&x.terms, &d, l, c, 0.0).0;
+        let used: Vec<(&Window, &Terms)> = self
+            .windows
+            .iter()
+            .zip(&x.terms)
+            .filter_map(|(w, t)| t.as_ref().map(|t| (w, t)))
+            .collect();
+        let (mut cov, h) = self.jackknife(&x.terms, &d, l, c)?;
+        // The formal σ is the floor (see the module doc): each parameter's variance raised to it,
+        // the jackknife's correlations kept.
+        if let Some(formal) = self.formal_covariance(&x.terms, &d, l, c) {
+            let raise: Vec<f64> = (0..p)
+                .map(|k| {
+                    let (jack, floor) = (cov[(k, k)], formal[(k, k)]);
+                    if jack > 0.0 && floor > jack {
+                        (floor / jack).sqrt()
+                    } else {
+                        1.0
+                    }
+                })
+                .collect();
+            for a in 0..p {
+                for b in 0..p {
+                    cov[(a, b)] *= raise[a] * raise[b];
+                }
+                // A jackknife that saw no spread at all (a parameter no window moves).
+                if cov[(a, a)] <= 0.0 {
+                    cov[(a, a)] = formal[(a, a)].max(0.0);
+                }
+            }
+        }
+        let sig = |i: usize| cov[(i, i)].max(0.0).sqrt();
+        // Converged: the Newton step left is within the parameters' own uncertainty (the
+        // estimating equations are as rough as their noise at that scale; the σ floored, which
+        // moved no validation mission's convergence). Half a σ was the rule
+        // while a jump of the estimate could bend a fit; with jumps given their own frames, one σ
+        // took a 1 Hz-reference mission's σ from 447 to 7 ms and located a step 0.01 s off instead of
+        // 43 s (docs/evidence.md).
+        let converged = remaining.is_some_and(|step| {
+            (0..m).all(|k| step[k].abs() <= sig(k).max(1e-4))
+                && (!with_lever || (m..p).all(|k| step[k].abs() <= sig(k).max(1e-3)))
+        });
+        let variance_inflation = if with_lever {
+            // Var(θ₀) with D free over Var(θ₀) with D held, from the normal equations.
+            h.clone()
+                .try_inverse()
+                .map_or(f64::INFINITY, |inv| inv[(0, 0)] * h[(0, 0)])
+        } else {
+            1.0
+        };
+        Some(PoseFit {
+            shape: self.shape.clone(),
+            theta: x.theta,
+            lever_m: d,
+            theta_sigma: (0..m).map(sig).collect(),
+            lever_sigma_m: with_lever.then(|| Vector3::new(sig(m), sig(m + 1), sig(m + 2))),
+            covariance: cov,
+            variance_inflation,
+            windows: used.iter().map(|(w, _)| (*w).clone()).collect(),
+            outliers: Vec::new(),
+            rms_m: used.iter().map(|(_, t)| t.rms_m()).collect(),
+            scale: x.scale,
+            jacobian_scale: c,
+            iterations,
+            converged: converged && used.len() >= 3,
+        })
+    }
+}
+
+/// The lever prior's weight: the windows' residual variance per coordinate over the prior's
+/// variance [`LEVER_PRIOR_M`]².
+pub(super) fn lever_weight(terms: &[Option<Terms>]) -> f64 {
+    let (rss, n) = residual_sums(terms);
+    rss / (3.0 * n.max(1) as f64) / (LEVER_PRIOR_M * LEVER_PRIOR_M)
+}
+
+/// The residual sum of squares and the points of the windows' `terms`.
+fn residual_sums(terms: &[Option<Terms>]) -> (f64, usize) {
+    terms
+        .iter()
+        .flatten()
+        .fold((0.0, 0usize), |(r, n), t| (r + t.rss, n + t.n))
+}
+
+/// The merit of the estimating equations: Σ g_k²/H_kk with the current iterate's `scales` (the
+/// Newton direction descends it).
+fn merit(g: &DVector<f64>, scales: &DVector<f64>) -> f64 {
+    g.iter()
+        .zip(scales.iter())
+        .map(|(g, h)| if *h > 0.0 { g * g / h } else { 0.0 })
+        .sum::<f64>()
+}
+
+/// The Jacobian's `m` clock columns of `j` scaled by the secant correction `c`.
+fn scale_clock_columns(j: &mut DMatrix<f64>, m: usize, c: f64) {
+    for k in 0..m {
+        j.column_mut(k).scale_mut(c);
+    }
+}

@@ -1,0 +1,234 @@
+//! The pose fit's tests, on simulated missions with a known offset and lever: the offset and lever
+//! recovered, jumps of the estimate, the σ against the spread of the answers, a clock step located,
+//! the profile's scatter factor.
+
+use super::shared::{lever_weight, SharedFit};
+use super::*;
+
+/// A simulated mission: the reference 10 Hz over 110 s, the estimate at 20 Hz stamped on its own
+/// clock (`dt_at(t)` late, t true time), its sensor `lever` from the reference point, in a
+/// rotated frame with a 2 % scale error; the body drives curves at `speed(t)`.
+#[derive(Clone)]
+struct Sim {
+    ref_t: Vec<f64>,
+    ref_p: Vec<Vector3<f64>>,
+    t: Vec<f64>,
+    p: Vec<Vector3<f64>>,
+    q: Vec<UnitQuaternion<f64>>,
+    jumps: Vec<(f64, f64)>,
+}
+
+impl Sim {
+    fn new(dt_at: &dyn Fn(f64) -> f64, speed: &dyn Fn(f64) -> f64, lever: Vector3<f64>) -> Sim {
+        let yaw_at = |t: f64| 0.8 * (0.05 * t).sin() + 0.3 * (0.13 * t).cos();
+        // Integrate the body at 1 kHz.
+        let n = 120_000;
+        let mut pos = Vec::with_capacity(n);
+        let mut yaws = Vec::with_capacity(n);
+        let mut p = Vector3::zeros();
+        for i in 0..n {
+            let t = i as f64 * 0.001;
+            let yaw = yaw_at(t);
+            pos.push(p);
+            yaws.push(yaw);
+            p += Vector3::new(yaw.cos(), yaw.sin(), 0.0) * speed(t) * 0.001;
+        }
+        let at = |t: f64| {
+            let i = ((t * 1000.0) as usize).min(n - 1);
+            (pos[i], yaws[i])
+        };
+        let ref_t: Vec<f64> = (0..1100).map(|i| 1.0 + i as f64 * 0.1).collect();
+        let ref_p: Vec<Vector3<f64>> = ref_t.iter().map(|&t| at(t).0).collect();
+        let frame = UnitQuaternion::from_euler_angles(0.0, 0.0, 1.1);
+        let (mut et, mut ep, mut eq) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 0..2300 {
+            let t_true = 0.5 + i as f64 * 0.05;
+            let (p, yaw) = at(t_true);
+            let r = UnitQuaternion::from_euler_angles(0.0, 0.0, yaw);
+            et.push(t_true - dt_at(t_true));
+            ep.push(frame * ((p + r * lever) * 1.02) + Vector3::new(5.0, -3.0, 1.0));
+            eq.push(frame * r);
+        }
+        let jumps = crate::align::jumps::jumps(&et, &ep, 1.0);
+        Sim {
+            ref_t,
+            ref_p,
+            t: et,
+            p: ep,
+            q: eq,
+            jumps,
+        }
+    }
+
+    /// The estimate moved by `by` from `at_s` on (its clock): a localiser correcting itself.
+    fn jumped(mut self, at_s: f64, by: Vector3<f64>) -> Sim {
+        for (t, p) in self.t.iter().zip(&mut self.p) {
+            if *t >= at_s {
+                *p += by;
+            }
+        }
+        self.jumps = crate::align::jumps::jumps(&self.t, &self.p, 1.0);
+        self
+    }
+
+    fn data(&self) -> PoseData<'_> {
+        PoseData {
+            ref_t: &self.ref_t,
+            ref_p: &self.ref_p,
+            estimate: PoseTrack {
+                t: &self.t,
+                p: &self.p,
+                q: &self.q,
+                jumps: &self.jumps,
+            },
+            params: PoseFitParams {
+                max_gap_s: 1.0,
+                window_s: None,
+            },
+        }
+    }
+}
+
+/// One offset and the lever over the windows `w`, from `start_s` and no lever.
+fn constant_from(data: &PoseData<'_>, w: &[Window], start_s: f64) -> PoseFit {
+    let shape = ClockShape::Constant;
+    fit(data, w, shape, vec![start_s], Vector3::zeros(), true).unwrap()
+}
+
+/// A body driving curves with speed changes; the estimate 0.3 m ahead and 0.2 m above its
+/// reference point, in a rotated frame with a 2 % scale error and a known offset: the fit
+/// recovers the offset to well under a millisecond and the horizontal lever to a centimetre.
+#[test]
+fn recovers_offset_and_lever_on_a_noise_free_mission() {
+    let dt_true = 0.137;
+    let lever = Vector3::new(0.3, 0.0, 0.2);
+    let sim = Sim::new(&|_| dt_true, &|t| 1.0 + 0.5 * (0.21 * t).sin(), lever);
+    let data = sim.data();
+    let w = data.windows();
+    let f = constant_from(&data, &w, 0.1);
+    assert!((f.theta[0] - dt_true).abs() < 5e-4, "{:?}", f.theta);
+    // The horizontal lever, scaled like the estimate; the vertical one is invisible without tilt
+    // (the prior keeps it at 0).
+    let want = Vector3::new(lever.x, lever.y, 0.0) * 1.02;
+    assert!((f.lever_m - want).norm() < 0.01, "{:?}", f.lever_m);
+    assert!(f.converged);
+}
+
+/// Two position jumps of the estimate inside windows (0.8 m and 0.4 m) are two new frames, not
+/// clock events: the offset stays within half a millisecond and the windows holding them are
+/// fitted.
+#[test]
+fn a_jump_of_the_estimate_does_not_move_the_offset() {
+    let dt_true = 0.137;
+    let lever = Vector3::new(0.3, 0.0, 0.2);
+    let sim = Sim::new(&|_| dt_true, &|t| 1.0 + 0.5 * (0.21 * t).sin(), lever)
+        .jumped(31.03, Vector3::new(0.6, -0.5, 0.1))
+        .jumped(79.51, Vector3::new(-0.3, 0.25, 0.0));
+    assert_eq!(sim.jumps.len(), 2, "{:?}", sim.jumps);
+    let data = sim.data();
+    let w = data.windows();
+    let f = constant_from(&data, &w, 0.1);
+    assert!((f.theta[0] - dt_true).abs() < 5e-4, "{:?}", f.theta);
+    // The windows holding the jumps are fitted, not set aside (noise-free, the residuals are
+    // nanometres everywhere, so which window counts as an outlier is numerical noise).
+    for jump_s in [31.03 + dt_true, 79.51 + dt_true] {
+        assert!(f
+            .windows
+            .iter()
+            .any(|w| w.t_start < jump_s && jump_s < w.t_end));
+    }
+    assert!(f.converged);
+}
+
+/// White noise on the reference, drawn again and again: the formal σ of Δt is the spread of its
+/// answers; the σ the fit reports (the jackknife over five windows, floored by the formal σ) is
+/// never below it and at most two thirds above it.
+#[test]
+fn the_sigma_of_the_offset_is_the_spread_of_its_answers() {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    let dt_true = 0.137;
+    let lever = Vector3::new(0.3, 0.0, 0.2);
+    let clean = Sim::new(&|_| dt_true, &|t| 1.0 + 0.5 * (0.21 * t).sin(), lever);
+    let noise = Normal::new(0.0, 0.03).unwrap();
+    let (mut errors2, mut sigmas2, mut formal2) = (0.0, 0.0, 0.0);
+    for seed in 0..40 {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut sim = clean.clone();
+        for p in &mut sim.ref_p {
+            *p += Vector3::from_fn(|_, _| noise.sample(&mut rng));
+        }
+        let data = sim.data();
+        let w = data.windows();
+        let f = constant_from(&data, &w, 0.1);
+        let problem = data.problem();
+        let shared = SharedFit {
+            problem: &problem,
+            windows: &f.windows,
+            shape: &ClockShape::Constant,
+            with_lever: true,
+            m: 1,
+            p: 4,
+        };
+        let terms = shared.eval(&f.theta, &f.lever_m, f.scale);
+        let l = lever_weight(&terms);
+        let formal = shared
+            .formal_covariance(&terms, &f.lever_m, l, f.jacobian_scale)
+            .unwrap();
+        assert!(f.theta_sigma[0] >= 0.999 * formal[(0, 0)].sqrt());
+        errors2 += (f.theta[0] - dt_true).powi(2);
+        sigmas2 += f.theta_sigma[0].powi(2);
+        formal2 += formal[(0, 0)];
+    }
+    // White residuals: the formal σ is the spread itself; the reported one (the jackknife of
+    // five windows where it is larger) somewhat above it.
+    let formal = (errors2 / formal2).sqrt();
+    assert!(
+        (0.75..1.33).contains(&formal),
+        "RMS error / RMS formal σ {formal}"
+    );
+    let reported = (errors2 / sigmas2).sqrt();
+    assert!(
+        (0.6..1.0).contains(&reported),
+        "RMS error / RMS σ {reported}"
+    );
+}
+
+/// At a constant walking speed a clock step leaves the speed signals nothing to locate it by;
+/// the positions do: the change time is found to a fraction of a second.
+#[test]
+fn locates_a_step_at_constant_speed() {
+    let lever = Vector3::new(0.3, 0.0, 0.2);
+    let dt = |t: f64| if t < 60.0 { 0.437 } else { 0.137 };
+    let sim = Sim::new(&dt, &|_| 0.5, lever);
+    let located = locate_change(
+        &sim.data(),
+        &(lever * 1.02),
+        1.02,
+        (0.437, 0.137),
+        (40.0, 80.0),
+    )
+    .unwrap();
+    assert!((located - 60.0).abs() < 0.5, "{located}");
+}
+
+#[test]
+fn scatter_factor_of_honest_sigmas_is_near_one() {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+    let n = Normal::new(0.0, 1.0).unwrap();
+    let w: Vec<(f64, f64, f64)> = (0..4000)
+        .map(|k| {
+            (
+                k as f64 * 20.0,
+                0.3 + 1e-5 * k as f64 + 0.004 * n.sample(&mut rng),
+                0.004,
+            )
+        })
+        .collect();
+    let f = scatter_factor(&w);
+    assert!((f - 1.0).abs() < 0.05, "{f}");
+    let w3: Vec<(f64, f64, f64)> = w.iter().map(|&(t, d, s)| (t, d, s / 3.0)).collect();
+    assert!((scatter_factor(&w3) - 3.0).abs() < 0.15);
+}

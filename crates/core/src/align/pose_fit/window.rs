@@ -1,0 +1,837 @@
+//! One window's problem: the estimate's poses interpolated at the reference's times under a clock
+//! and a lever ([`Problem::points`]), the window's similarity and heading drift fitted to them
+//! ([`WindowPoints`], [`Nuisance`]) and eliminated from its normal equations ([`Terms`],
+//! [`NormalSums`]). Both fits build on it: the whole mission's (`shared.rs`) sums these equations,
+//! the profile (`profile.rs`) solves them one window at a time; nothing here steps the clock or
+//! the lever. Also here: how the mission is cut into windows ([`windows`]), and
+//! [`locate_change`], which fits the same similarities to the two sides of a clock change.
+
+use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, Vector3};
+
+use super::{
+    ClockShape, PoseData, PoseTrack, DRIFT_PRIOR_M2S2, MIN_WINDOW_SAMPLES, SCALE_PRIOR_M, WINDOW_S,
+};
+
+/// The half-step h of the instrument's central differences: two of the estimate's periods (the
+/// samples it interpolates are not those of the point) and at least 50 ms (a difference over
+/// shorter times is mostly the estimate's noise: 3 mm of noise over ±10 ms is 0.2 m/s), at most
+/// 0.25 s, seconds.
+const STENCIL_MIN_S: f64 = 0.05;
+const STENCIL_MAX_S: f64 = 0.25;
+/// A window's search compares its residual on every ⌊n/SEARCH_POINTS⌋-th of its n reference
+/// samples (this many to twice as many; all of a window of fewer), and the root it finds is then
+/// refined on all of them. A stretch between jumps counts [`MIN_SEGMENT_SAMPLES`] of those taken.
+const SEARCH_POINTS: usize = 32;
+
+/// The estimate's position and attitude at one time (linear interpolation).
+#[derive(Clone, Copy)]
+struct At {
+    p: Vector3<f64>,
+    r: Matrix3<f64>,
+}
+
+/// Linear interpolation of the estimate's poses.
+struct Sampler<'a> {
+    track: PoseTrack<'a>,
+    /// The track's orientations as rotation matrices, converted once (each point of every
+    /// iteration interpolates five poses, ten conversions otherwise).
+    rotations: Vec<Matrix3<f64>>,
+    gap: f64,
+}
+
+impl Sampler<'_> {
+    /// The pose at `t` (estimate clock); `None` outside the track or across a gap longer than the
+    /// largest gap. `hint`: the index found last (rising queries walk from it).
+    fn at(&self, t: f64, hint: &mut usize) -> Option<At> {
+        let ts = self.track.t;
+        let n = ts.len();
+        let mut j = (*hint).min(n);
+        while j < n && ts[j] < t {
+            j += 1;
+        }
+        while j > 0 && ts[j - 1] >= t {
+            j -= 1;
+        }
+        *hint = j;
+        if j == 0 || j >= n {
+            return None;
+        }
+        let (a, b) = (j - 1, j);
+        let span = ts[b] - ts[a];
+        if span > self.gap || span <= 0.0 {
+            return None;
+        }
+        let f = (t - ts[a]) / span;
+        let (ra, rb) = (self.rotations[a], self.rotations[b]);
+        Some(At {
+            p: self.track.p[a] + (self.track.p[b] - self.track.p[a]) * f,
+            r: ra + (rb - ra) * f,
+        })
+    }
+
+    /// The stretch of the track between jumps that `[t − reach, t + reach]` (estimate clock) lies
+    /// in, `None` when a jump falls within it (its interpolation would mix the two frames).
+    fn segment(&self, t: f64, reach: f64) -> Option<usize> {
+        let jumps = self.track.jumps;
+        let k = jumps.partition_point(|&(_, after)| after <= t - reach);
+        match jumps.get(k) {
+            Some(&(before, _)) if before < t + reach => None,
+            _ => Some(k),
+        }
+    }
+}
+
+/// A window: reference samples `range`, its centre time.
+#[derive(Debug, Clone)]
+pub struct Window {
+    pub range: std::ops::Range<usize>,
+    pub t_start: f64,
+    pub t_end: f64,
+}
+
+impl Window {
+    /// The window's centre, reference clock.
+    pub fn t(&self) -> f64 {
+        0.5 * (self.t_start + self.t_end)
+    }
+}
+
+/// The reduced normal equations of one window (its similarity eliminated), at the current parameters.
+#[derive(Debug, Clone)]
+pub(super) struct Terms {
+    pub(super) n: usize,
+    pub(super) rss: f64,
+    /// The estimating equations g = Σ v·e over the shared parameters, v the instrument (∂model/∂θ
+    /// from central differences over ±h, which interpolate other samples of the estimate than the
+    /// point itself: the residual's own noise does not enter them); h = Σ v·v; j = Σ v·w with w the
+    /// same derivative over two of the estimate's periods more (samples independent of v's again):
+    /// the Newton Jacobian of g, free of the bias Σ v·v takes from v's noise. The window's similarity and drift eliminated (Schur
+    /// complement).
+    pub(super) h: DMatrix<f64>,
+    pub(super) j: DMatrix<f64>,
+    pub(super) g: DVector<f64>,
+    /// Σ (p_ref − p̄_ref)·R(u − ū) and Σ|u − ū|²: the window's scale evidence.
+    pub(super) tr: f64,
+    pub(super) s_uu: f64,
+    /// Σ|p_ref − p̄_ref|²: what the window's motion explains.
+    pub(super) s_rr: f64,
+    /// The stretches between the estimate's jumps the window's points fall in, each with its own
+    /// similarity and drift (1 without a jump).
+    pub(super) segments: usize,
+}
+
+/// A stretch of a window between two of the estimate's jumps holds at least this many reference
+/// samples to be fitted (its similarity and drift are 8 parameters); fewer are left out.
+const MIN_SEGMENT_SAMPLES: usize = 6;
+
+/// The problem: reference samples, the estimate's poses, the windows.
+pub(super) struct Problem<'a> {
+    ref_t: &'a [f64],
+    ref_p: &'a [Vector3<f64>],
+    sampler: Sampler<'a>,
+    /// The half-steps of the central differences for ∂u/∂Δt, seconds (see [`Terms`]): the
+    /// instrument's, and the Jacobian's (two of the estimate's periods more: other samples again).
+    h: f64,
+    hw: f64,
+}
+
+/// One point of a window: reference position, the estimate's position ê, u = ê − R̂·D, ∂u/∂Δt
+/// over ±h (the instrument) and over ±h_w (for the Newton Jacobian), R̂, time.
+#[derive(Clone)]
+struct Pt {
+    r: Vector3<f64>,
+    e: Vector3<f64>,
+    u: Vector3<f64>,
+    du: Vector3<f64>,
+    dw: Vector3<f64>,
+    rhat: Matrix3<f64>,
+    t: f64,
+    /// The stretch of the estimate between jumps the point's stencil lies in.
+    seg: usize,
+}
+
+impl Terms {
+    /// The residual's degrees of freedom before the shared parameters: three per point, less each
+    /// stretch's similarity and drift (8).
+    pub(super) fn dof(&self) -> f64 {
+        (3 * self.n) as f64 - 8.0 * self.segments as f64
+    }
+
+    /// The window's residual RMS, metres.
+    pub(super) fn rms_m(&self) -> f64 {
+        (self.rss / self.n as f64).sqrt()
+    }
+
+    /// The equations of two stretches of one window fitted apart (their nuisances their own).
+    fn plus(self, o: Terms) -> Terms {
+        Terms {
+            n: self.n + o.n,
+            rss: self.rss + o.rss,
+            h: self.h + o.h,
+            j: self.j + o.j,
+            g: self.g + o.g,
+            tr: self.tr + o.tr,
+            s_uu: self.s_uu + o.s_uu,
+            s_rr: self.s_rr + o.s_rr,
+            segments: self.segments + o.segments,
+        }
+    }
+}
+
+/// The reduced normal equations of the points `pts` under one similarity and drift (a window, or
+/// a stretch of one between jumps; see [`Problem::terms`]).
+fn segment_terms(pts: Vec<Pt>, shape: &ClockShape, with_lever: bool, s_bar: f64) -> Option<Terms> {
+    let m = shape.len();
+    let p = m + if with_lever { 3 } else { 0 };
+    let n = pts.len();
+    let win = WindowPoints::new(pts);
+    let nuisance = win.nuisance(s_bar);
+    let mut sums = NormalSums::zeros(p);
+    let mut shared = SharedColumns::new(m, with_lever);
+    for (q, dw) in win.pts.iter().zip(&nuisance.drift) {
+        let (e, cols) = nuisance.residual(&win, q, dw);
+        shared.fill(q, &nuisance, shape);
+        sums.add(&e, &cols, &shared.v, &shared.x);
+    }
+    let rss = sums.rss;
+    let (h, j, g) = sums.reduce(&nuisance, win.nf, s_bar)?;
+    Some(Terms {
+        n,
+        rss,
+        h,
+        j,
+        g,
+        tr: nuisance.tr,
+        s_uu: nuisance.s_uu,
+        s_rr: win.s_rr,
+        segments: 1,
+    })
+}
+
+/// `pts` (in time order) cut into the stretches of the estimate between jumps they fall in, those of
+/// fewer than [`MIN_SEGMENT_SAMPLES`] points left out (their similarity and drift are 8 parameters).
+fn stretches(pts: Vec<Pt>) -> Vec<Vec<Pt>> {
+    let mut out: Vec<Vec<Pt>> = Vec::new();
+    let mut rest = pts.into_iter().peekable();
+    while let Some(first) = rest.next() {
+        let mut run = vec![first];
+        while let Some(q) = rest.next_if(|q| q.seg == run[0].seg) {
+            run.push(q);
+        }
+        if run.len() >= MIN_SEGMENT_SAMPLES {
+            out.push(run);
+        }
+    }
+    out
+}
+
+impl Problem<'_> {
+    /// The reduced normal equations of window `w` for the clock `shape`/`theta` (its parameters
+    /// first) and, when `with_lever`, the lever D (the last three); `d` is the lever used either way.
+    /// `s_bar`: the mission's scale (the prior's centre).
+    pub(super) fn terms(
+        &self,
+        w: &Window,
+        shape: &ClockShape,
+        theta: &[f64],
+        d: &Vector3<f64>,
+        with_lever: bool,
+        s_bar: f64,
+    ) -> Option<Terms> {
+        let pts = self.points(w, shape, theta, d);
+        if pts.len() < MIN_WINDOW_SAMPLES {
+            return None;
+        }
+        if pts.first().map(|q| q.seg) == pts.last().map(|q| q.seg) {
+            return segment_terms(pts, shape, with_lever, s_bar);
+        }
+        // A jump of the estimate within the window: each stretch between jumps its own similarity
+        // and drift, their reduced equations summed (the stretches share only θ and D).
+        let mut total: Option<Terms> = None;
+        for run in stretches(pts) {
+            let Some(t) = segment_terms(run, shape, with_lever, s_bar) else {
+                continue;
+            };
+            total = Some(match total {
+                None => t,
+                Some(sum) => sum.plus(t),
+            });
+        }
+        total.filter(|t| t.n >= MIN_WINDOW_SAMPLES)
+    }
+
+    /// Window `w`'s residual at the constant offset `offset_s` with the lever `d`: the mean squared
+    /// residual per point once each stretch's similarity is fitted (scale held about `s_bar`; no
+    /// heading drift), metres², on [`SEARCH_POINTS`] to twice as many of its samples. What a search over
+    /// offsets compares: one interpolation per point instead of [`Problem::points`]'s five, and no
+    /// normal equations. `None` with fewer than [`MIN_WINDOW_SAMPLES`] points.
+    pub(super) fn mean_square_m2(
+        &self,
+        w: &Window,
+        offset_s: f64,
+        d: &Vector3<f64>,
+        s_bar: f64,
+    ) -> Option<f64> {
+        let stride = (w.range.len() / SEARCH_POINTS).max(1);
+        let mut pts: Vec<Pt> = Vec::with_capacity(w.range.len().div_ceil(stride));
+        let mut hint: Option<usize> = None;
+        for i in w.range.clone().step_by(stride) {
+            let t = self.ref_t[i];
+            let te = t - offset_s;
+            let hint = hint
+                .get_or_insert_with(|| self.sampler.track.t.partition_point(|&x| x < te - self.hw));
+            let (Some(seg), Some(a)) =
+                (self.sampler.segment(te, self.hw), self.sampler.at(te, hint))
+            else {
+                continue;
+            };
+            pts.push(Pt {
+                r: self.ref_p[i],
+                e: a.p,
+                u: a.p - a.r * d,
+                du: Vector3::zeros(),
+                dw: Vector3::zeros(),
+                rhat: a.r,
+                t,
+                seg,
+            });
+        }
+        let (mut rss, mut n) = (0.0, 0usize);
+        for run in stretches(pts) {
+            let win = WindowPoints::new(run);
+            rss += win.similarity_rss(s_bar);
+            n += win.pts.len();
+        }
+        (n >= MIN_WINDOW_SAMPLES).then(|| rss / n as f64)
+    }
+
+    /// The points of window `w` (see [`Pt`]) for the clock `shape`/`theta` and the lever `d`: the
+    /// reference samples whose time on the estimate's clock, and the stencils of the central
+    /// differences around it, fall where the estimate's poses can be interpolated.
+    fn points(&self, w: &Window, shape: &ClockShape, theta: &[f64], d: &Vector3<f64>) -> Vec<Pt> {
+        let mut pts: Vec<Pt> = Vec::with_capacity(w.range.len());
+        let mut hints = [0usize; 5];
+        let (h, hw) = (self.h, self.hw);
+        for i in w.range.clone() {
+            let t = self.ref_t[i];
+            let te = t - shape.value(theta, t);
+            // The hints of the first query of the window by bisection, the rest walk.
+            if pts.is_empty() {
+                hints = [self.sampler.track.t.partition_point(|&x| x < te - hw); 5];
+            }
+            let Some(seg) = self.sampler.segment(te, hw) else {
+                continue;
+            };
+            let mut at = |k: usize, dt: f64| self.sampler.at(te + dt, &mut hints[k]);
+            let (Some(a), Some(m1), Some(p1), Some(m2), Some(p2)) =
+                (at(0, 0.0), at(1, -h), at(2, h), at(3, -hw), at(4, hw))
+            else {
+                continue;
+            };
+            let u = |x: &At| x.p - x.r * d;
+            pts.push(Pt {
+                r: self.ref_p[i],
+                e: a.p,
+                u: u(&a),
+                // u(t − Δt) moves by −u̇ per second of Δt.
+                du: (u(&m1) - u(&p1)) / (2.0 * h),
+                dw: (u(&m2) - u(&p2)) / (2.0 * hw),
+                rhat: a.r,
+                t,
+                seg,
+            });
+        }
+        pts
+    }
+}
+
+/// A window's points and their centroids: what its similarity and drift are fitted to.
+struct WindowPoints {
+    pts: Vec<Pt>,
+    /// The number of points (the priors' weights grow with it).
+    nf: f64,
+    /// The centroids of the reference positions (r̄) and of u (ū), metres, and of the times (t̄),
+    /// seconds.
+    rbar_m: Vector3<f64>,
+    ubar_m: Vector3<f64>,
+    tbar_s: f64,
+    /// Σ|p_ref − p̄_ref|²: what the window's motion explains (see [`Terms`]).
+    s_rr: f64,
+}
+
+impl WindowPoints {
+    /// The centroids of `pts`.
+    fn new(pts: Vec<Pt>) -> WindowPoints {
+        let nf = pts.len() as f64;
+        let rbar_m = pts.iter().map(|q| q.r).sum::<Vector3<f64>>() / nf;
+        let ubar_m = pts.iter().map(|q| q.u).sum::<Vector3<f64>>() / nf;
+        let tbar_s = pts.iter().map(|q| q.t).sum::<f64>() / nf;
+        let s_rr: f64 = pts.iter().map(|q| (q.r - rbar_m).norm_squared()).sum();
+        WindowPoints {
+            pts,
+            nf,
+            rbar_m,
+            ubar_m,
+            tbar_s,
+            s_rr,
+        }
+    }
+
+    /// The scale given Σ r̃·R·ũ (`tr`) and Σ|ũ|² (`s_uu`), held about the mission's `s_bar` by its
+    /// prior (weight n·[`SCALE_PRIOR_M`]²).
+    fn scale_of(&self, tr: f64, s_uu: f64, s_bar: f64) -> f64 {
+        let lambda = self.scale_prior_m2();
+        ((tr + lambda * s_bar) / (s_uu + lambda)).max(1e-3)
+    }
+
+    /// The scale prior's weight λ = n·[`SCALE_PRIOR_M`]², m².
+    fn scale_prior_m2(&self) -> f64 {
+        self.nf * SCALE_PRIOR_M * SCALE_PRIOR_M
+    }
+
+    /// Σ|p_ref − r̄ − s·R·(u − ū)|² under the similarity alone (no heading drift): the residual a
+    /// search over offsets compares.
+    fn similarity_rss(&self, s_bar: f64) -> f64 {
+        let (rot, tr, s_uu) = self.similarity(&|i| self.pts[i].u - self.ubar_m);
+        let s = self.scale_of(tr, s_uu, s_bar);
+        self.pts
+            .iter()
+            .map(|q| (s * (rot * (q.u - self.ubar_m)) + self.rbar_m - q.r).norm_squared())
+            .sum()
+    }
+
+    /// The similarity of the centred points ũ_i = `at(i)` to the centred reference positions r̃:
+    /// the rotation R maximising Σ r̃·R·ũ (Umeyama), that Σ r̃·R·ũ and Σ|ũ|² (the scale's evidence).
+    fn similarity(&self, at: &dyn Fn(usize) -> Vector3<f64>) -> (Matrix3<f64>, f64, f64) {
+        let mut cov = Matrix3::zeros();
+        let mut s_uu = 0.0;
+        for (i, q) in self.pts.iter().enumerate() {
+            let du = at(i);
+            cov += (q.r - self.rbar_m) * du.transpose();
+            s_uu += du.norm_squared();
+        }
+        let rot = rotation_of(&cov);
+        (rot, (rot.transpose() * cov).trace(), s_uu)
+    }
+
+    /// The basis w_i of a heading drift about `up` (centred): a heading drifting at b rad/s moves
+    /// the points by b·w_i, w_i = ∫(τ − t̄)·up × dê over the window's own increments.
+    fn drift_basis(&self, up: &Vector3<f64>) -> Vec<Vector3<f64>> {
+        let pts = &self.pts;
+        let mut drift = Vec::with_capacity(pts.len());
+        let mut acc = Vector3::zeros();
+        drift.push(acc);
+        for k in 1..pts.len() {
+            let mid = 0.5 * (pts[k - 1].t + pts[k].t) - self.tbar_s;
+            acc += up.cross(&(pts[k].e - pts[k - 1].e)) * mid;
+            drift.push(acc);
+        }
+        let dbar = drift.iter().sum::<Vector3<f64>>() / self.nf;
+        for w in &mut drift {
+            *w -= dbar;
+        }
+        drift
+    }
+
+    /// The window's nuisance (see [`Nuisance`]): the similarity of the centred points, then twice
+    /// the drift rate given the similarity and the similarity given the rate (when the window's
+    /// increments give the drift a basis). The scale is held to the mission's `s_bar` by its prior.
+    fn nuisance(&self, s_bar: f64) -> Nuisance {
+        let nf = self.nf;
+        let lambda = self.scale_prior_m2();
+        let scale_of = |tr: f64, s_uu: f64| self.scale_of(tr, s_uu, s_bar);
+        let (mut rot, mut tr, mut s_uu) = self.similarity(&|i| self.pts[i].u - self.ubar_m);
+        // The estimate's heading drifting within the window at a rate b about its vertical: its
+        // positions carry b·∫(τ − t̄)·ẑ × dê (integrated over the window's own increments), which
+        // no rotation of the whole window removes.
+        let drift = self.drift_basis(&(rot.transpose() * Vector3::z()));
+        let d_ww: f64 = drift.iter().map(|w| w.norm_squared()).sum();
+        let mut b = 0.0;
+        let mut s = scale_of(tr, s_uu);
+        if d_ww > 0.0 {
+            for _ in 0..2 {
+                // b given the similarity, then the similarity given b.
+                let num: f64 = self
+                    .pts
+                    .iter()
+                    .zip(&drift)
+                    .map(|(q, w)| {
+                        (rot * w).dot(&(s * (rot * (q.u - self.ubar_m)) - (q.r - self.rbar_m)))
+                    })
+                    .sum();
+                b = num / (s * (d_ww + nf * DRIFT_PRIOR_M2S2 / (s * s)));
+                (rot, tr, s_uu) = self.similarity(&|i| self.pts[i].u - self.ubar_m - drift[i] * b);
+                s = scale_of(tr, s_uu);
+            }
+        }
+        Nuisance {
+            rot,
+            scale: s,
+            rate_rad_s: b,
+            drift,
+            tr,
+            s_uu,
+            lambda_m2: lambda,
+        }
+    }
+}
+
+/// A window's nuisance, fitted to its points: its similarity (rotation, scale; the translation is
+/// the centroids') and its heading drift rate b, p_ref − r̄ ≈ s·R·(u − ū − b·w).
+struct Nuisance {
+    rot: Matrix3<f64>,
+    scale: f64,
+    /// b, rad/s.
+    rate_rad_s: f64,
+    /// The drift's basis w_i, one per point ([`WindowPoints::drift_basis`]).
+    drift: Vec<Vector3<f64>>,
+    /// Σ r̃·R·ũ and Σ|ũ|² of the last similarity (the window's scale evidence, see [`Terms`]).
+    tr: f64,
+    s_uu: f64,
+    /// The scale prior's weight λ = n·[`SCALE_PRIOR_M`]², m².
+    lambda_m2: f64,
+}
+
+impl Nuisance {
+    /// Point `q`'s residual e (the model less the reference, metres) and the model's derivatives by
+    /// the nuisance: translation (3), rotation (3, δω applied on the left), scale (1), heading drift
+    /// rate (1). `dw`: the point's drift basis.
+    fn residual(
+        &self,
+        win: &WindowPoints,
+        q: &Pt,
+        dw: &Vector3<f64>,
+    ) -> (Vector3<f64>, [Vector3<f64>; 8]) {
+        let (rot, s, b) = (self.rot, self.scale, self.rate_rad_s);
+        let wv = s * (rot * (q.u - win.ubar_m - dw * b));
+        let e = wv + win.rbar_m - q.r;
+        let cols: [Vector3<f64>; 8] = [
+            Vector3::x(),
+            Vector3::y(),
+            Vector3::z(),
+            Vector3::x().cross(&wv),
+            Vector3::y().cross(&wv),
+            Vector3::z().cross(&wv),
+            wv / s,
+            -(rot * dw) * s,
+        ];
+        (e, cols)
+    }
+}
+
+/// One point's columns of the shared parameters (the clock's, then the lever's when fitted): `v`
+/// the instrument's (∂u/∂Δt over ±h), `x` the Jacobian's (over ±h_w); `phi` holds the clock's
+/// basis. Refilled point after point.
+struct SharedColumns {
+    phi: Vec<f64>,
+    v: Vec<Vector3<f64>>,
+    x: Vec<Vector3<f64>>,
+    with_lever: bool,
+}
+
+impl SharedColumns {
+    /// Room for `m` clock parameters and, when `with_lever`, the lever's three.
+    fn new(m: usize, with_lever: bool) -> SharedColumns {
+        let p = m + if with_lever { 3 } else { 0 };
+        SharedColumns {
+            phi: vec![0.0; m],
+            v: vec![Vector3::zeros(); p],
+            x: vec![Vector3::zeros(); p],
+            with_lever,
+        }
+    }
+
+    /// The columns of point `q` under the window's `nuisance`: the clock's basis φ(t) times s·R·∂u/∂Δt,
+    /// and −s·R·R̂ for the lever (u = ê − R̂·D).
+    fn fill(&mut self, q: &Pt, nuisance: &Nuisance, shape: &ClockShape) {
+        let (rot, s) = (nuisance.rot, nuisance.scale);
+        let m = self.phi.len();
+        shape.basis(q.t, &mut self.phi);
+        let sdu = s * (rot * q.du);
+        let sdw = s * (rot * q.dw);
+        for (k, f) in self.phi.iter().enumerate() {
+            self.v[k] = sdu * *f;
+            self.x[k] = sdw * *f;
+        }
+        if self.with_lever {
+            let sr = s * (rot * q.rhat);
+            for c in 0..3 {
+                self.v[m + c] = -sr.column(c).into_owned();
+                self.x[m + c] = self.v[m + c];
+            }
+        }
+    }
+}
+
+/// The sums of a window's normal equations over its points, the nuisance N (8 columns) against
+/// itself, the shared parameters' instrument V and Jacobian X and the residual e (NᵀN, NᵀV, NᵀX,
+/// Nᵀe), the instrument against the same (VᵀV, VᵀX, Vᵀe), and the residual sum of squares.
+struct NormalSums {
+    ntn: SMatrix<f64, 8, 8>,
+    nte: SMatrix<f64, 8, 1>,
+    /// NᵀV, NᵀX (8 × p) and VᵀV, VᵀX (p × p), row-major: one point adds to each entry in turn, so
+    /// the entries a point touches lie next to each other (each entry's sum is the same sum, in the
+    /// same order, as in a matrix type's storage; only the memory walk differs).
+    ntv: Vec<f64>,
+    ntx: Vec<f64>,
+    vtv: Vec<f64>,
+    vtx: Vec<f64>,
+    vte: Vec<f64>,
+    p: usize,
+    rss: f64,
+}
+
+impl NormalSums {
+    /// Empty sums for `p` shared parameters.
+    fn zeros(p: usize) -> NormalSums {
+        NormalSums {
+            ntn: SMatrix::<f64, 8, 8>::zeros(),
+            nte: SMatrix::<f64, 8, 1>::zeros(),
+            ntv: vec![0.0; 8 * p],
+            ntx: vec![0.0; 8 * p],
+            vtv: vec![0.0; p * p],
+            vtx: vec![0.0; p * p],
+            vte: vec![0.0; p],
+            p,
+            rss: 0.0,
+        }
+    }
+
+    /// Adds one point: its residual `e`, nuisance columns `cols` and shared columns `v` and `x`
+    /// (of the symmetric NᵀN and VᵀV the upper triangles only).
+    fn add(
+        &mut self,
+        e: &Vector3<f64>,
+        cols: &[Vector3<f64>; 8],
+        v: &[Vector3<f64>],
+        x: &[Vector3<f64>],
+    ) {
+        let p = self.p;
+        self.rss += e.norm_squared();
+        for a in 0..8 {
+            let ca = &cols[a];
+            self.nte[a] += ca.dot(e);
+            for (b, cb) in cols.iter().enumerate().skip(a) {
+                self.ntn[(a, b)] += ca.dot(cb);
+            }
+            let rows = self.ntv[a * p..(a + 1) * p]
+                .iter_mut()
+                .zip(&mut self.ntx[a * p..(a + 1) * p]);
+            for ((sv, sx), (vb, xb)) in rows.zip(v.iter().zip(x)) {
+                *sv += ca.dot(vb);
+                *sx += ca.dot(xb);
+            }
+        }
+        for (a, va) in v.iter().enumerate() {
+            self.vte[a] += va.dot(e);
+            let (vtv, vtx) = (
+                &mut self.vtv[a * p..(a + 1) * p],
+                &mut self.vtx[a * p..(a + 1) * p],
+            );
+            for (b, (vb, xb)) in v.iter().zip(x).enumerate() {
+                if b >= a {
+                    vtv[b] += va.dot(vb);
+                }
+                vtx[b] += va.dot(xb);
+            }
+        }
+    }
+
+    /// The reduced equations (H, J and g of [`Terms`]): the symmetric sums completed, the priors of
+    /// the window's `nuisance` (its scale about the mission's `s_bar`, its drift rate about 0; `nf`
+    /// points) and a ridge added, then the nuisance eliminated (the Schur complement). `None` when
+    /// the nuisance's block cannot be inverted.
+    fn reduce(
+        mut self,
+        nuisance: &Nuisance,
+        nf: f64,
+        s_bar: f64,
+    ) -> Option<(DMatrix<f64>, DMatrix<f64>, DVector<f64>)> {
+        let p = self.p;
+        for a in 0..8 {
+            for b in 0..a {
+                self.ntn[(a, b)] = self.ntn[(b, a)];
+            }
+        }
+        for a in 0..p {
+            for b in 0..a {
+                self.vtv[a * p + b] = self.vtv[b * p + a];
+            }
+        }
+        // The priors: residuals √λ·(s − s̄) and √λ_b·b.
+        let lambda = nuisance.lambda_m2;
+        self.ntn[(6, 6)] += lambda;
+        self.nte[6] += lambda * (nuisance.scale - s_bar);
+        self.ntn[(7, 7)] += nf * DRIFT_PRIOR_M2S2;
+        self.nte[7] += nf * DRIFT_PRIOR_M2S2 * nuisance.rate_rad_s;
+        // A rotation or a drift the window does not determine (its points on a line, standing)
+        // stays put.
+        let ridge = 1e-9 * (0..8).map(|a| self.ntn[(a, a)]).fold(0.0, f64::max);
+        for a in 0..8 {
+            self.ntn[(a, a)] += ridge;
+        }
+        let inv = self.ntn.try_inverse()?;
+        let ntn_inv = DMatrix::from_fn(8, 8, |a, b| inv[(a, b)]);
+        let ntv = DMatrix::from_row_slice(8, p, &self.ntv);
+        let ntx = DMatrix::from_row_slice(8, p, &self.ntx);
+        let vtv = DMatrix::from_row_slice(p, p, &self.vtv);
+        let vtx = DMatrix::from_row_slice(p, p, &self.vtx);
+        let xv = &ntn_inv * &ntv;
+        let h = &vtv - ntv.transpose() * &xv;
+        let j = &vtx - xv.transpose() * &ntx;
+        let nte_d = DVector::from_fn(8, |a, _| self.nte[a]);
+        let g = DVector::from_column_slice(&self.vte) - xv.transpose() * nte_d;
+        Some((h, j, g))
+    }
+}
+
+/// The rotation R maximising tr(Rᵀ·cov) (Kabsch: cov = Σ (r − r̄)(u − ū)ᵀ), identity when cov
+/// holds nothing.
+fn rotation_of(cov: &Matrix3<f64>) -> Matrix3<f64> {
+    if cov.norm() <= 0.0 || !cov.iter().all(|v| v.is_finite()) {
+        return Matrix3::identity();
+    }
+    let svd = cov.svd(true, true);
+    let (Some(u), Some(vt)) = (svd.u, svd.v_t) else {
+        return Matrix3::identity();
+    };
+    let sign = (u * vt).determinant().signum();
+    u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, sign)) * vt
+}
+
+/// Cuts the reference's span into windows of [`WINDOW_S`] (or longer, to hold
+/// [`MIN_WINDOW_SAMPLES`] at the reference's median rate).
+pub fn windows(ref_t: &[f64], window_s: Option<f64>) -> Vec<Window> {
+    let n = ref_t.len();
+    if n < MIN_WINDOW_SAMPLES {
+        return Vec::new();
+    }
+    let mut steps: Vec<f64> = ref_t.windows(2).map(|w| w[1] - w[0]).collect();
+    let mid = steps.len() / 2;
+    let period = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let len = window_s.unwrap_or(WINDOW_S.max(1.5 * MIN_WINDOW_SAMPLES as f64 * period));
+    let (a, b) = (ref_t[0], ref_t[n - 1]);
+    let count = ((b - a) / len).floor().max(1.0) as usize;
+    // The windows share the span evenly (no sliver at the end).
+    let len = (b - a) / count as f64;
+    (0..count)
+        .map(|k| {
+            let (lo, hi) = (a + k as f64 * len, a + (k + 1) as f64 * len);
+            let start = ref_t.partition_point(|&t| t < lo);
+            let end = if k + 1 == count {
+                n
+            } else {
+                ref_t.partition_point(|&t| t < hi)
+            };
+            Window {
+                range: start..end,
+                t_start: lo,
+                t_end: hi,
+            }
+        })
+        .collect()
+}
+
+// The mission's problem, built here beside the types it fills (`PoseData` itself is in `mod.rs`).
+impl<'a> PoseData<'a> {
+    pub(super) fn problem(&self) -> Problem<'a> {
+        let mut steps: Vec<f64> = self.estimate.t.windows(2).map(|w| w[1] - w[0]).collect();
+        let period = if steps.is_empty() {
+            0.01
+        } else {
+            let mid = steps.len() / 2;
+            *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+        };
+        Problem {
+            ref_t: self.ref_t,
+            ref_p: self.ref_p,
+            sampler: Sampler {
+                track: self.estimate,
+                rotations: self
+                    .estimate
+                    .q
+                    .iter()
+                    .map(|q| q.to_rotation_matrix().into_inner())
+                    .collect(),
+                gap: self.params.max_gap_s,
+            },
+            h: (2.0 * period).clamp(STENCIL_MIN_S, STENCIL_MAX_S),
+            hw: (2.0 * period).clamp(STENCIL_MIN_S, STENCIL_MAX_S) + 2.0 * period,
+        }
+    }
+}
+
+/// How many times the change time and the two sides' similarities are refined in turn.
+const LOCATE_ROUNDS: usize = 3;
+
+/// The reference time τ in [lo, hi] at which the clock changes from Δt₁ to Δt₂ (`d`), located on
+/// the positions: τ minimises Σ_{t<τ} |e₁(t)|² + Σ_{t≥τ} |e₂(t)|², e_k the residual of the reference
+/// sample at t against the estimate at t − Δt_k (less its `lever_m`) mapped by a similarity fitted
+/// to the points on side k of τ, half a window beyond [lo, hi] included (scale held about `s_bar`
+/// like the windows'); τ and the two similarities in turn, from the middle. The positions see a step
+/// where speed signals cannot (a walking robot's speed hardly changes): the estimate is displaced
+/// by its velocity times the step, which no similarity of a side removes. `None` with fewer than
+/// [`MIN_WINDOW_SAMPLES`] points on a side.
+pub fn locate_change(
+    data: &PoseData<'_>,
+    lever_m: &Vector3<f64>,
+    s_bar: f64,
+    d: (f64, f64),
+    (lo, hi): (f64, f64),
+) -> Option<f64> {
+    let problem = data.problem();
+    let pad = 0.5 * data.params.window_s.unwrap_or(WINDOW_S);
+    let stretch = Window {
+        range: data.ref_t.partition_point(|&t| t < lo - pad)
+            ..data.ref_t.partition_point(|&t| t <= hi + pad),
+        t_start: lo - pad,
+        t_end: hi + pad,
+    };
+    // Each reference sample under both clocks (the samples where either cannot be interpolated
+    // dropped).
+    let under = |dt: f64| problem.points(&stretch, &ClockShape::Constant, &[dt], lever_m);
+    let (p1, p2) = (under(d.0), under(d.1));
+    let mut both: Vec<(Pt, Pt)> = Vec::with_capacity(p1.len());
+    let mut later = p2.into_iter().peekable();
+    for a in p1 {
+        while later.next_if(|b| b.t < a.t).is_some() {}
+        if let Some(b) = later.next_if(|b| b.t == a.t) {
+            both.push((a, b));
+        }
+    }
+    let mut tau = 0.5 * (lo + hi);
+    let mut located = None;
+    for _ in 0..LOCATE_ROUNDS {
+        let side = |before: bool| {
+            let pts: Vec<Pt> = both
+                .iter()
+                .filter(|(a, _)| (a.t < tau) == before)
+                .map(|(a, b)| if before { a.clone() } else { b.clone() })
+                .collect();
+            (pts.len() >= MIN_WINDOW_SAMPLES).then(|| {
+                let w = WindowPoints::new(pts);
+                let n = w.nuisance(s_bar);
+                (w, n)
+            })
+        };
+        let (Some((w1, n1)), Some((w2, n2))) = (side(true), side(false)) else {
+            return located;
+        };
+        let err = |w: &WindowPoints, n: &Nuisance, q: &Pt| {
+            (n.scale * (n.rot * (q.u - w.ubar_m)) + w.rbar_m - q.r).norm_squared()
+        };
+        // (time, cost before, cost after) of every sample in [lo, hi]: the split of least cost.
+        let costs: Vec<(f64, f64, f64)> = both
+            .iter()
+            .filter(|(a, _)| a.t >= lo && a.t <= hi)
+            .map(|(a, b)| (a.t, err(&w1, &n1, a), err(&w2, &n2, b)))
+            .collect();
+        let split = crate::align::clock_model::least_cost_split(&costs)?;
+        located = Some(split);
+        if split == tau {
+            break;
+        }
+        tau = split;
+    }
+    located
+}
