@@ -72,7 +72,8 @@ pub struct OffsetProfile {
     pub method: OffsetMethod,
     pub window_s: f64,
     pub step_s: f64,
-    /// Scale applied to the residual σ (see the module doc), ≥ 1.
+    /// Scale applied to the residual σ (see the module doc), ≥ 1 (the pose fit's windows also carry
+    /// an excess added in quadrature: [`crate::align::pose_fit::WindowScatter`]).
     pub sigma_scale: f64,
     pub windows: Vec<ProfileWindow>,
 }

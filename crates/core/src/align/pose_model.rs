@@ -6,8 +6,9 @@
 //!    jump of the estimate inside them) are left out.
 //! 2. **Profile.** Each window's own Δt with D held ([`pose_fit::profile`]; searched ±3 s for a
 //!    deeper root where the whole mission's constant is uncertain beyond 2 ms), its σ the window's
-//!    least-squares error scaled by the scatter of the windows about their neighbours
-//!    ([`pose_fit::scatter_factor`]): model-free for a constant clock and a linear drift alike.
+//!    least-squares error calibrated by the scatter of the windows about their neighbours, a factor
+//!    and an excess every window shares ([`pose_fit::scatter_calibration`]): model-free for a
+//!    constant clock and a linear drift alike.
 //! 3. **Model.** [`crate::align::clock_model::choose_model`] over the profile: a drift or a step only
 //!    when the windows' calibrated σ refute one constant (BIC margin), a step only with two windows
 //!    of support on each side.
@@ -440,8 +441,8 @@ fn shape_of(model: &ClockModel, offset0: f64) -> (ClockShape, Vec<f64>) {
     }
 }
 
-/// The profile of the windows' offsets, their σ scaled by the scatter factor; `None` with fewer than
-/// three windows.
+/// The profile of the windows' offsets, their σ calibrated by the windows' scatter
+/// ([`pose_fit::scatter_calibration`]); `None` with fewer than three windows.
 fn calibrated_profile(
     raw: Vec<pose_fit::WindowOffset>,
     windows: &[pose_fit::Window],
@@ -453,7 +454,7 @@ fn calibrated_profile(
     let step_s = windows
         .get(1)
         .map_or(window_s, |w| (w.t_start - windows[0].t_start).min(window_s));
-    // The scatter factor from windows that do not overlap (every window of a disjoint profile; one
+    // The calibration from windows that do not overlap (every window of a disjoint profile; one
     // a window's length apart of an overlapping one): overlapping neighbours share samples and
     // would scatter less than their σ says.
     let mut independent: Vec<(f64, f64, f64)> = Vec::new();
@@ -465,11 +466,10 @@ fn calibrated_profile(
             independent.push((w.t, w.offset_s, w.formal_sigma_s));
         }
     }
-    let f = pose_fit::scatter_factor(&independent)
-        // The formal σ assumes independent residuals; real ones are correlated (gait, drift, slow GNSS
-        // errors), so the windows scatter at least as much as it says: a factor below 1 is chance
-        // (few windows), not evidence.
-        .max(1.0);
+    // The formal σ assumes independent residuals; real ones are correlated (gait, drift, slow GNSS
+    // errors), so the windows scatter at least as much as it says: a factor below 1 is chance (few
+    // windows), not evidence (the calibration keeps f ≥ 1).
+    let scatter = pose_fit::scatter_calibration(&independent);
     // A window whose σ is many times the typical one weighs nothing in any fit and pins nothing:
     // left out of the profile.
     let sigmas: Vec<f64> = raw.iter().map(|w| w.formal_sigma_s).collect();
@@ -478,14 +478,14 @@ fn calibrated_profile(
         method: OffsetMethod::Pose,
         window_s,
         step_s,
-        sigma_scale: f,
+        sigma_scale: scatter.factor,
         windows: raw
             .iter()
             .filter(|w| w.formal_sigma_s <= MAX_SIGMA_RATIO * typical)
             .map(|w| ProfileWindow {
                 t: w.t,
                 offset_s: w.offset_s,
-                sigma_s: (w.formal_sigma_s * f).max(POSE_SIGMA_FLOOR_S),
+                sigma_s: scatter.sigma_s(w.formal_sigma_s).max(POSE_SIGMA_FLOOR_S),
                 correlation: w.quality,
                 usable: true,
             })

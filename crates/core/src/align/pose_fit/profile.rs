@@ -267,22 +267,10 @@ fn formal_sigma(t: &Terms, c: f64) -> Option<f64> {
 /// the median (robust), iterated to its fixed point. 1 with fewer than three terms.
 pub fn scatter_factor(w: &[(f64, f64, f64)]) -> f64 {
     // (t, offset, σ) in time order.
-    let mut terms: Vec<f64> = Vec::new();
-    for k in 1..w.len().saturating_sub(1) {
-        let (t0, d0, s0) = w[k - 1];
-        let (t1, d1, s1) = w[k];
-        let (t2, d2, s2) = w[k + 1];
-        if t2 <= t0 {
-            continue;
-        }
-        let a = (t2 - t1) / (t2 - t0);
-        let b = (t1 - t0) / (t2 - t0);
-        let e = d1 - (a * d0 + b * d2);
-        let v = s1 * s1 + a * a * s0 * s0 + b * b * s2 * s2;
-        if v > 0.0 {
-            terms.push(e * e / v);
-        }
-    }
+    let terms: Vec<f64> = neighbour_terms(w)
+        .into_iter()
+        .map(|(e2, v, _)| e2 / v)
+        .collect();
     if terms.len() < 3 {
         return 1.0;
     }
@@ -306,4 +294,118 @@ pub fn scatter_factor(w: &[(f64, f64, f64)]) -> f64 {
         f2 = next;
     }
     f2.sqrt()
+}
+
+/// The windows' calibration (module doc): σ_k² = (`factor`·s_k)² + `extra_s`², s_k a window's
+/// least-squares error.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindowScatter {
+    /// f ≥ 1: residuals correlated within a window.
+    pub factor: f64,
+    /// τ ≥ 0, seconds: the error every window has beyond what its residuals show.
+    pub extra_s: f64,
+}
+
+impl WindowScatter {
+    /// The calibrated σ of a window whose least-squares error is `formal_s`.
+    pub fn sigma_s(&self, formal_s: f64) -> f64 {
+        (self.factor * formal_s).hypot(self.extra_s)
+    }
+}
+
+/// f and τ of the module doc from the windows `w` (t, offset, least-squares σ; in time order, not
+/// overlapping): each neighbour term e_k² has the expectation f²·v_k + c_k·τ² (v_k its variance from
+/// the least-squares σ, c_k = 1 + a² + b² the share of τ² the interpolation carries); f² and τ² are
+/// fitted by least squares weighted by the expectation's inverse square (a χ² term's variance is
+/// twice its square), the terms beyond [`CLIP_CHI2`] times it set aside, from f = [`scatter_factor`]
+/// and τ = 0 to the fixed point; a bound reached (f = 1 or τ = 0) refits the other alone. f = 1 and
+/// τ = 0 with fewer than three terms.
+///
+/// Windows whose σ are honest but for an excess of 2 ms, the same in each:
+/// ```
+/// use trajdrift_core::align::pose_fit::scatter_calibration;
+/// // Offsets alternating ±2.45 ms about 0.1 s: every e_k is ±4.9 ms whether the windows' own σ
+/// // is 1 ms or 3 ms (two of each in turn): an excess shared by all, not a factor.
+/// let w: Vec<(f64, f64, f64)> = (0..40)
+///     .map(|k| {
+///         let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+///         (20.0 * k as f64, 0.1 + sign * 0.00245, if k % 4 < 2 { 0.001 } else { 0.003 })
+///     })
+///     .collect();
+/// let c = scatter_calibration(&w);
+/// assert!(c.factor >= 1.0 && c.extra_s > 0.0);
+/// // The sharp windows widen most: one factor would have scaled them alike.
+/// assert!(c.sigma_s(0.001) / 0.001 > c.sigma_s(0.003) / 0.003);
+/// ```
+pub fn scatter_calibration(w: &[(f64, f64, f64)]) -> WindowScatter {
+    let terms = neighbour_terms(w);
+    if terms.len() < 3 {
+        return WindowScatter {
+            factor: 1.0,
+            extra_s: 0.0,
+        };
+    }
+    let mut f2 = scatter_factor(w).powi(2).max(1.0);
+    let mut t2 = 0.0f64;
+    for _ in 0..50 {
+        // Weighted normal equations of y = e²/(clip's mean) on (v, c).
+        let (mut svv, mut svc, mut scc, mut syv, mut syc) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for &(e2, v, c) in &terms {
+            let expected = f2 * v + c * t2;
+            if e2 > CLIP_CHI2 * expected {
+                continue;
+            }
+            let q = 1.0 / (expected * expected);
+            let y = e2 / CLIPPED_MEAN;
+            svv += q * v * v;
+            svc += q * v * c;
+            scc += q * c * c;
+            syv += q * y * v;
+            syc += q * y * c;
+        }
+        let det = svv * scc - svc * svc;
+        if det <= 0.0 || scc <= 0.0 || svv <= 0.0 {
+            break;
+        }
+        let (mut nf2, mut nt2) = ((syv * scc - syc * svc) / det, (svv * syc - svc * syv) / det);
+        if nf2 < 1.0 {
+            nf2 = 1.0;
+            nt2 = ((syc - svc) / scc).max(0.0);
+        }
+        if nt2 < 0.0 {
+            nt2 = 0.0;
+            nf2 = (syv / svv).max(1.0);
+        }
+        let settled = (nf2 - f2).abs() <= 1e-9 * f2 && (nt2 - t2).abs() <= 1e-9 * (t2 + 1e-12);
+        f2 = nf2;
+        t2 = nt2;
+        if settled {
+            break;
+        }
+    }
+    WindowScatter {
+        factor: f2.sqrt(),
+        extra_s: t2.sqrt(),
+    }
+}
+
+/// The neighbour terms of `w` (module doc): (e_k², v_k, c_k) for each inner window.
+fn neighbour_terms(w: &[(f64, f64, f64)]) -> Vec<(f64, f64, f64)> {
+    let mut terms = Vec::new();
+    for k in 1..w.len().saturating_sub(1) {
+        let (t0, d0, s0) = w[k - 1];
+        let (t1, d1, s1) = w[k];
+        let (t2, d2, s2) = w[k + 1];
+        if t2 <= t0 {
+            continue;
+        }
+        let a = (t2 - t1) / (t2 - t0);
+        let b = (t1 - t0) / (t2 - t0);
+        let e = d1 - (a * d0 + b * d2);
+        let v = s1 * s1 + a * a * s0 * s0 + b * b * s2 * s2;
+        if v > 0.0 {
+            terms.push((e * e, v, 1.0 + a * a + b * b));
+        }
+    }
+    terms
 }
