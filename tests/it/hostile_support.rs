@@ -42,7 +42,7 @@ pub enum EstimateMsg {
     Pose,
 }
 
-/// A small ROS 1 bag: the reference's points along x = 0.1·i, y = sin(`wave`·i), z = `z_m`, one
+/// A small ROS 1 bag: the reference's points along x = 0.1·i, y = sin(`wave_rad`·i), z = `z_m`, one
 /// every `period_ns`, and each estimate topic holding the same positions (the one bag writer of the
 /// tests).
 #[derive(Clone, Debug)]
@@ -50,7 +50,8 @@ pub struct BagShape<'a> {
     pub compression: BagCompression,
     pub n: u32,
     pub period_ns: i64,
-    pub wave: f64,
+    /// Radians of the sine per sample.
+    pub wave_rad: f64,
     pub z_m: f64,
     pub chunk_bytes: usize,
     pub estimates: &'a [(&'a str, EstimateMsg)],
@@ -62,7 +63,7 @@ impl Default for BagShape<'_> {
             compression: BagCompression::None,
             n: 50,
             period_ns: 100_000_000,
-            wave: 0.1,
+            wave_rad: 0.1,
             z_m: 0.5,
             chunk_bytes: 1024,
             estimates: &[("/estimate/odom", EstimateMsg::Odometry)],
@@ -100,7 +101,7 @@ impl BagShape<'_> {
             };
             let point = Point {
                 x: i as f64 * 0.1,
-                y: (i as f64 * self.wave).sin(),
+                y: (i as f64 * self.wave_rad).sin(),
                 z: self.z_m,
             };
             let ps = PointStamped {

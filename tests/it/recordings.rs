@@ -127,7 +127,7 @@ fn write_bag(path: &Path, compression: BagCompression, n: u32) {
         compression,
         n,
         period_ns: 10_000_000,
-        wave: 0.01,
+        wave_rad: 0.01,
         chunk_bytes: 4096,
         estimates: &[
             ("/estimate/odom", EstimateMsg::Odometry),

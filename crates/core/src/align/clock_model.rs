@@ -317,7 +317,10 @@ impl Fit {
     }
 
     /// The Birge ratio √(χ²/dof) over `len` windows and `k` parameters, at least 1: how much the
-    /// windows scatter about the fit beyond their σ (ρ cancels: χ² and dof are both counted ρ times).
+    /// windows scatter about the fit beyond their σ. χ² and dof are both taken over every window, as
+    /// the drift's σ always took them; with overlapping windows (ρ > 1) the independent dof are
+    /// n/ρ − k, fewer than (n − k)/ρ, so the ratio comes out a little low there (the pose fit's
+    /// profile is disjoint unless `--offset-step` asks otherwise).
     fn birge(&self, len: usize, k: usize) -> f64 {
         let dof = (len as f64 - k as f64).max(1.0);
         (self.chi2 / dof).sqrt().max(1.0)

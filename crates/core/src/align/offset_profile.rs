@@ -73,7 +73,7 @@ pub struct OffsetProfile {
     pub window_s: f64,
     pub step_s: f64,
     /// Scale applied to the residual σ (see the module doc), ≥ 1 (the pose fit's windows also carry
-    /// an excess added in quadrature: [`crate::align::pose_fit::WindowScatter`]).
+    /// an excess added in quadrature, see `pose_fit::scatter_calibration`; this is its factor).
     pub sigma_scale: f64,
     pub windows: Vec<ProfileWindow>,
 }

@@ -667,8 +667,8 @@ mod tests {
             ..ClockModel::constant(0.1, 0.0, String::new())
         };
         let shape = ClockShape::Linear { t_mid: 40.0 };
-        // θ₁ = −48·10⁻⁶ s/s is a clock running 48 ppm fast; its σ of 1 ppm is raised to the
-        // profile line's 3 ppm, and the offset's 0.2 ms to the line's at t_mid (1 ms).
+        // θ₁ = −48·10⁻⁶ s/s is a clock running 48 ppm fast; its σ of 1 ppm is raised to the 3 ppm
+        // `choose_model` left on the model, and the offset's 0.2 ms to the line's at t_mid (1 ms).
         set_parameters(
             &mut m,
             &fit(shape.clone(), vec![0.1, -48e-6], vec![2e-4, 1e-6]),

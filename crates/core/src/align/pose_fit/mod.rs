@@ -57,17 +57,20 @@
 //! or in a first look without a lever, can settle at a root of its own a few hundred milliseconds
 //! off, as sharp as the right one.
 //!
-//! A window's σ is its least-squares error s_k = σ̂_k/√H_k (σ̂_k² = its residual per degree of
-//! freedom) calibrated by the windows' scatter about the line through their neighbours:
+//! A window's σ is its least-squares error s_k (`formal_sigma`: σ̂_k·√H_k/(c·J_k), the
+//! instrumental-variable form, σ̂_k² its residual per degree of freedom) calibrated by the windows'
+//! scatter about the line through their neighbours:
 //! e_k = Δt_k − (interpolation of Δt_{k−1} and Δt_{k+1} at t_k) is free of any constant and any
 //! linear drift. Two things make the windows scatter beyond s_k, and one factor cannot model both:
 //! residuals correlated within a window (every s_k too small by the same factor f), and errors the
-//! residuals do not show at all — a gait aliased by the estimate's rate, a reference error slower than
-//! a window, receipt-time jitter along the track — which are about the same size in every window
-//! however sharp its geometry (an excess τ). So σ_k² = (f·s_k)² + τ² (a random-effects model, as in
-//! a meta-analysis of studies that share an extra spread), f ≥ 1 and τ ≥ 0 fitted by weighted least
-//! squares of e_k² on its expectation, the terms beyond 4σ set aside ([`CLIP_CHI2`]: a step, which
-//! spoils two, does not decide it); see [`scatter_calibration`]. With f alone the sharpest windows
+//! residuals do not show at all — a gait aliased by the estimate's rate, receipt-time jitter along
+//! the track — which are about the same size in every window however sharp its geometry, and
+//! independent from one window to the next (an excess τ; an error common to neighbours cancels in
+//! e_k and is left to the floors of [`crate::align::pose_model`]). So σ_k² = (f·s_k)² + τ² (a
+//! random-effects model, as in a meta-analysis of studies each with an extra spread of one size),
+//! f ≥ 1 and τ ≥ 0 fitted by weighted least squares of e_k² on its expectation, the terms beyond 4σ
+//! set aside ([`CLIP_CHI2`]: a step, which spoils two, does not decide it); see
+//! [`scatter_calibration`]. With f alone the sharpest windows
 //! were too sure: on the validation's windows sharper than their mission's median, 2σ covered 87 %
 //! (the others 95 %); with τ, 92 % and 94 % (docs/evidence.md). This is what makes a drift or a step,
 //! judged against the windows' σ, a claim the data support (see [`crate::align::clock_model`]).
@@ -99,8 +102,8 @@ pub const SCALE_PRIOR_M: f64 = 1.0;
 pub const DRIFT_PRIOR_M2S2: f64 = 400.0;
 /// Prior σ of each lever component, metres (keeps a lever the data cannot see at 0).
 pub const LEVER_PRIOR_M: f64 = 1.0;
-/// A window's squared scatter beyond this many (squared) σ of the current factor is set aside when
-/// the profile's scale factor is estimated (4σ).
+/// A window's squared scatter beyond this many times its current expectation is set aside when the
+/// profile's windows are calibrated (4σ).
 pub const CLIP_CHI2: f64 = 16.0;
 /// The variance inflation of Δt by the lever above which the two are called inseparable.
 pub const INSEPARABLE_VIF: f64 = 25.0;

@@ -1,6 +1,6 @@
 //! The pose fit's tests, on simulated missions with a known offset and lever: the offset and lever
 //! recovered, jumps of the estimate, the σ against the spread of the answers, a clock step located,
-//! the profile's scatter factor.
+//! the profile's calibration by the windows' scatter.
 
 use super::shared::{lever_weight, SharedFit};
 use super::*;
@@ -231,4 +231,55 @@ fn scatter_factor_of_honest_sigmas_is_near_one() {
     assert!((f - 1.0).abs() < 0.05, "{f}");
     let w3: Vec<(f64, f64, f64)> = w.iter().map(|&(t, d, s)| (t, d, s / 3.0)).collect();
     assert!((scatter_factor(&w3) - 3.0).abs() < 0.15);
+}
+
+/// Windows whose errors are (f·s)² + τ² in variance: the calibration recovers f and τ, and a
+/// non-finite window does not poison it.
+#[test]
+fn scatter_calibration_recovers_a_factor_and_an_excess() {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let n = Normal::new(0.0, 1.0).unwrap();
+    let mut windows = |factor: f64, extra_s: f64| -> Vec<(f64, f64, f64)> {
+        (0..4000)
+            .map(|k| {
+                // Least-squares σ from 1 to 6 ms, as sharp and dull windows alternate.
+                let s = 0.001 * (1.0 + (k % 6) as f64);
+                let sd = (factor * s).hypot(extra_s);
+                (
+                    k as f64 * 20.0,
+                    0.3 + 1e-5 * k as f64 + sd * n.sample(&mut rng),
+                    s,
+                )
+            })
+            .collect()
+    };
+    let c = scatter_calibration(&windows(1.0, 0.002));
+    assert!(
+        (c.factor - 1.0).abs() < 0.1 && (c.extra_s - 0.002).abs() < 0.0003,
+        "{c:?}"
+    );
+    let c = scatter_calibration(&windows(2.0, 0.0));
+    assert!((c.factor - 2.0).abs() < 0.1 && c.extra_s < 0.0005, "{c:?}");
+    let c = scatter_calibration(&windows(1.5, 0.003));
+    assert!(
+        (c.factor - 1.5).abs() < 0.15 && (c.extra_s - 0.003).abs() < 0.0005,
+        "{c:?}"
+    );
+    // Honest σ: nothing added.
+    let honest = scatter_calibration(&windows(1.0, 0.0));
+    assert!(
+        honest.factor < 1.05 && honest.extra_s < 0.0005,
+        "{honest:?}"
+    );
+    // A NaN offset and an infinite σ among them: set aside, the answer finite.
+    let mut w = windows(1.0, 0.002);
+    w[10].1 = f64::NAN;
+    w[20].2 = f64::INFINITY;
+    let c = scatter_calibration(&w);
+    assert!(
+        c.factor.is_finite() && (c.extra_s - 0.002).abs() < 0.0003,
+        "{c:?}"
+    );
 }
