@@ -174,7 +174,7 @@ fn validate_command_prints_the_table_and_writes_grades() {
 }
 
 /// Development aid: one mission's report in detail. `KIND=ground SEED=3 cargo test --release --test
-/// it -- --ignored --nocapture one_mission`.
+/// it -- --ignored --nocapture one_mission` (`REDRAW=12`: the scatter over fresh noise draws).
 #[test]
 #[ignore]
 fn one_mission() {
@@ -228,6 +228,43 @@ fn one_mission() {
     }
     if let Ok(v) = std::env::var("REF_HZ") {
         s.ref_rate_hz = v.parse().unwrap();
+    }
+    // REDRAW=K: the same route, rates, levers and gait K times, the noise, terrain and first
+    // heading drawn again (the scenario's seed moved): how far Δt scatters, against its σ.
+    if let Ok(k) = std::env::var("REDRAW") {
+        let k: u64 = k.parse().unwrap();
+        let t0 = START_NS as f64 * 1e-9;
+        let mut errors = Vec::new();
+        for r in 0..k {
+            let mut d = s.clone();
+            if r > 0 {
+                d.seed = seed * 1000 + r;
+            }
+            let m = d.simulate();
+            let rep = evaluate_pair(m.reference, m.estimate).unwrap();
+            let o = &rep.estimates[0].time_offset;
+            let mid = match (o.profile.first(), o.profile.last()) {
+                (Some(a), Some(b)) => 0.5 * (a.t + b.t) - t0,
+                _ => 0.5 * m.duration_s,
+            };
+            let e = o.offset_s - d.offset_at(mid);
+            println!(
+                "draw {r}: error {:+.1} ms, σ {:.1} ms",
+                e * 1e3,
+                o.sigma_s.unwrap_or(f64::NAN) * 1e3
+            );
+            errors.push(e);
+        }
+        let n = errors.len() as f64;
+        let mean = errors.iter().sum::<f64>() / n;
+        let sd =
+            (errors.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt();
+        println!(
+            "mean {:+.1} ms, sd {:.1} ms over {k} draws",
+            mean * 1e3,
+            sd * 1e3
+        );
+        return;
     }
     println!(
         "{:?} seed {} ref {} Hz est {} Hz levers {:?} {:?} noise {:.3} yaw walk {:.3} latency {:?}",

@@ -18,8 +18,9 @@
 //! frame, its drift and its scale error, which odometry accumulates slowly) and, shared by every
 //! window, the lever D (the estimate's sensor relative to the reference's point, in the estimate's
 //! body frame) and the clock Δt(t) = Σ θ_m·φ_m(t) (constant, linear or piecewise, [`ClockShape`]). ê
-//! and R̂ are interpolated linearly between the estimate's samples (gaps longer than the largest gap
-//! are not bridged). Where the estimate jumps ([`crate::align::jumps`]: a localiser correcting
+//! and R̂ are interpolated by the cubic through the four samples around each time, which follows a
+//! gait sampled at 10 Hz where a straight line would shift its phase (`sampler.rs`; the line beside
+//! a jump or a gap; gaps longer than the largest gap are not bridged). Where the estimate jumps ([`crate::align::jumps`]: a localiser correcting
 //! itself), each side of the jump within a window has its own similarity and drift (the sides share
 //! only θ and D), and the points whose interpolation would reach across the jump are left out. A
 //! window's scale is held to the mission's by a prior worth [`SCALE_PRIOR_M`] of spread per sample, so a window that stands or turns in place (whose positions barely spread)
@@ -57,7 +58,7 @@
 //! or in a first look without a lever, can settle at a root of its own a few hundred milliseconds
 //! off, as sharp as the right one.
 //!
-//! A window's σ is its least-squares error s_k (`formal_sigma`: σ̂_k·√H_k/(c·J_k), the
+//! A window's σ is its least-squares error s_k (`formal_sigma`: σ̂_k·√H_k/(c·S_k), the
 //! instrumental-variable form, σ̂_k² its residual per degree of freedom) calibrated by the windows'
 //! scatter about the line through their neighbours:
 //! e_k = Δt_k − (interpolation of Δt_{k−1} and Δt_{k+1} at t_k) is free of any constant and any
@@ -78,6 +79,7 @@
 use nalgebra::{DMatrix, UnitQuaternion, Vector3};
 
 mod profile;
+mod sampler;
 mod shared;
 #[cfg(test)]
 mod tests;

@@ -398,7 +398,8 @@ impl SharedFit<'_> {
     }
 
     /// The formal covariance J⁻¹·σ̂²H·J⁻ᵀ of the summed equations, σ̂² the residual per degree of
-    /// freedom (white residuals assumed).
+    /// freedom (white residuals assumed). J, not the jackknife's H: where J understates the
+    /// Jacobian along a gait this floor is wide, never short.
     pub(super) fn formal_covariance(
         &self,
         terms: &[Option<Terms>],
@@ -416,10 +417,30 @@ impl SharedFit<'_> {
         Some(&ji * h * ji.transpose() * (rss / dof))
     }
 
+    /// The jackknife's Jacobian summed over `terms`, the lever's prior `l` added, its clock columns scaled
+    /// by the secant correction `c`.
+    fn summed_jackknife_jacobian(&self, terms: &[Option<Terms>], l: f64, c: f64) -> DMatrix<f64> {
+        let (m, p) = (self.m, self.p);
+        let mut s = DMatrix::<f64>::zeros(p, p);
+        for t in terms.iter().flatten() {
+            s += t.jackknife_jacobian();
+        }
+        if self.with_lever {
+            for k in 0..3 {
+                s[(m + k, m + k)] += l;
+            }
+        }
+        scale_clock_columns(&mut s, m, c);
+        s
+    }
+
     /// The delete-one-window jackknife at the solution (see the module doc): each window left out
-    /// by one Newton step of the summed equations less its own; the covariance
+    /// by one step (H − H_k)⁻¹·g_k of the summed equations less its own; the covariance
     /// (K−1)/K·Σ(δ₋ₖ − δ̄)(δ₋ₖ − δ̄)ᵀ of those steps, and the summed H (for the variance
     /// inflation). `None` when fewer than three windows could be left out.
+    ///
+    /// The steps take the jackknife's Jacobian ([`Terms::jackknife_jacobian`]: H at 10–20 Hz
+    /// estimates, where the Newton Jacobian J cannot follow a gait, else J).
     fn jackknife(
         &self,
         terms: &[Option<Terms>],
@@ -428,14 +449,15 @@ impl SharedFit<'_> {
         c: f64,
     ) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
         let (m, p) = (self.m, self.p);
-        let (h, j, _) = self.summed(terms, d, l, c);
+        let (h, _, _) = self.summed(terms, d, l, c);
+        let hc = self.summed_jackknife_jacobian(terms, l, c);
         let deltas: Vec<DVector<f64>> = terms
             .iter()
             .flatten()
             .filter_map(|t| {
-                let mut tj = t.j.clone();
-                scale_clock_columns(&mut tj, m, c);
-                (&j - tj).lu().solve(&t.g)
+                let mut tk = t.jackknife_jacobian().clone();
+                scale_clock_columns(&mut tk, m, c);
+                (&hc - tk).lu().solve(&t.g)
             })
             .collect();
         if deltas.len() < 3 {

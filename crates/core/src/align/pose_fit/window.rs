@@ -8,78 +8,22 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, Vector3};
 
-use super::{
-    ClockShape, PoseData, PoseTrack, DRIFT_PRIOR_M2S2, MIN_WINDOW_SAMPLES, SCALE_PRIOR_M, WINDOW_S,
-};
+use super::sampler::{At, Sampler};
+use super::{ClockShape, PoseData, DRIFT_PRIOR_M2S2, MIN_WINDOW_SAMPLES, SCALE_PRIOR_M, WINDOW_S};
 
-/// The half-step h of the instrument's central differences: two of the estimate's periods (the
-/// samples it interpolates are not those of the point) and at least 50 ms (a difference over
-/// shorter times is mostly the estimate's noise: 3 mm of noise over ±10 ms is 0.2 m/s), at most
-/// 0.25 s, seconds.
+/// The half-step h of the instrument's central differences: one of the estimate's periods, at
+/// least 50 ms (a difference over shorter times is mostly the estimate's noise: 3 mm of noise over
+/// ±10 ms is 0.2 m/s) and at most 0.25 s, seconds. One period, not more: a difference over ±h sees
+/// motion at f in proportion to sin(2πfh)/(2πfh), and a legged robot's gait (2–5 Hz) is the
+/// sharpest timing signal it has; over two periods of a 10 Hz estimate that response is 0.2 at
+/// 2 Hz and negative at 3.5 Hz, and the fit lost the gait. The samples the difference shares
+/// with its point do not correlate their noise (see `sampler.rs`).
 const STENCIL_MIN_S: f64 = 0.05;
 const STENCIL_MAX_S: f64 = 0.25;
 /// A window's search compares its residual on every ⌊n/SEARCH_POINTS⌋-th of its n reference
 /// samples (this many to twice as many; all of a window of fewer), and the root it finds is then
 /// refined on all of them. A stretch between jumps counts [`MIN_SEGMENT_SAMPLES`] of those taken.
 const SEARCH_POINTS: usize = 32;
-
-/// The estimate's position and attitude at one time (linear interpolation).
-#[derive(Clone, Copy)]
-struct At {
-    p: Vector3<f64>,
-    r: Matrix3<f64>,
-}
-
-/// Linear interpolation of the estimate's poses.
-struct Sampler<'a> {
-    track: PoseTrack<'a>,
-    /// The track's orientations as rotation matrices, converted once (each point of every
-    /// iteration interpolates five poses, ten conversions otherwise).
-    rotations: Vec<Matrix3<f64>>,
-    gap: f64,
-}
-
-impl Sampler<'_> {
-    /// The pose at `t` (estimate clock); `None` outside the track or across a gap longer than the
-    /// largest gap. `hint`: the index found last (rising queries walk from it).
-    fn at(&self, t: f64, hint: &mut usize) -> Option<At> {
-        let ts = self.track.t;
-        let n = ts.len();
-        let mut j = (*hint).min(n);
-        while j < n && ts[j] < t {
-            j += 1;
-        }
-        while j > 0 && ts[j - 1] >= t {
-            j -= 1;
-        }
-        *hint = j;
-        if j == 0 || j >= n {
-            return None;
-        }
-        let (a, b) = (j - 1, j);
-        let span = ts[b] - ts[a];
-        if span > self.gap || span <= 0.0 {
-            return None;
-        }
-        let f = (t - ts[a]) / span;
-        let (ra, rb) = (self.rotations[a], self.rotations[b]);
-        Some(At {
-            p: self.track.p[a] + (self.track.p[b] - self.track.p[a]) * f,
-            r: ra + (rb - ra) * f,
-        })
-    }
-
-    /// The stretch of the track between jumps that `[t − reach, t + reach]` (estimate clock) lies
-    /// in, `None` when a jump falls within it (its interpolation would mix the two frames).
-    fn segment(&self, t: f64, reach: f64) -> Option<usize> {
-        let jumps = self.track.jumps;
-        let k = jumps.partition_point(|&(_, after)| after <= t - reach);
-        match jumps.get(k) {
-            Some(&(before, _)) if before < t + reach => None,
-            _ => Some(k),
-        }
-    }
-}
 
 /// A window: reference samples `range`, its centre time.
 #[derive(Debug, Clone)]
@@ -102,13 +46,16 @@ pub(super) struct Terms {
     pub(super) n: usize,
     pub(super) rss: f64,
     /// The estimating equations g = Σ v·e over the shared parameters, v the instrument (∂model/∂θ
-    /// from central differences over ±h, which interpolate other samples of the estimate than the
-    /// point itself: the residual's own noise does not enter them); h = Σ v·v; j = Σ v·w with w the
-    /// same derivative over two of the estimate's periods more (samples independent of v's again):
-    /// the Newton Jacobian of g, free of the bias Σ v·v takes from v's noise. The window's similarity and drift eliminated (Schur
-    /// complement).
+    /// from central differences over ±h, whose noise is uncorrelated with the point's own although
+    /// they share samples: see `sampler.rs`); h = Σ v·v; j = Σ v·w with w the same derivative
+    /// over two of the estimate's periods more (mostly other samples than v's; the cubics at the
+    /// ends share one or two): the Newton Jacobian of g, nearly free of the bias Σ v·v takes from
+    /// v's noise, which steps the fits. The window's
+    /// similarity and drift eliminated (Schur complement).
     pub(super) h: DMatrix<f64>,
     pub(super) j: DMatrix<f64>,
+    /// Whether the jackknife takes h rather than j as the Jacobian ([`Problem::jackknife_on_h`]).
+    pub(super) jackknife_on_h: bool,
     pub(super) g: DVector<f64>,
     /// Σ (p_ref − p̄_ref)·R(u − ū) and Σ|u − ū|²: the window's scale evidence.
     pub(super) tr: f64,
@@ -130,7 +77,7 @@ pub(super) struct Problem<'a> {
     ref_p: &'a [Vector3<f64>],
     sampler: Sampler<'a>,
     /// The half-steps of the central differences for ∂u/∂Δt, seconds (see [`Terms`]): the
-    /// instrument's, and the Jacobian's (two of the estimate's periods more: other samples again).
+    /// instrument's, and the Jacobian's (two of the estimate's periods more: mostly other samples).
     h: f64,
     hw: f64,
 }
@@ -157,6 +104,15 @@ impl Terms {
         (3 * self.n) as f64 - 8.0 * self.segments as f64
     }
 
+    /// The Jacobian the jackknife's steps take: h or j ([`Problem::jackknife_on_h`]).
+    pub(super) fn jackknife_jacobian(&self) -> &DMatrix<f64> {
+        if self.jackknife_on_h {
+            &self.h
+        } else {
+            &self.j
+        }
+    }
+
     /// The window's residual RMS, metres.
     pub(super) fn rms_m(&self) -> f64 {
         (self.rss / self.n as f64).sqrt()
@@ -169,6 +125,7 @@ impl Terms {
             rss: self.rss + o.rss,
             h: self.h + o.h,
             j: self.j + o.j,
+            jackknife_on_h: self.jackknife_on_h,
             g: self.g + o.g,
             tr: self.tr + o.tr,
             s_uu: self.s_uu + o.s_uu,
@@ -200,6 +157,7 @@ fn segment_terms(pts: Vec<Pt>, shape: &ClockShape, with_lever: bool, s_bar: f64)
         rss,
         h,
         j,
+        jackknife_on_h: false,
         g,
         tr: nuisance.tr,
         s_uu: nuisance.s_uu,
@@ -242,8 +200,13 @@ impl Problem<'_> {
         if pts.len() < MIN_WINDOW_SAMPLES {
             return None;
         }
+        let jackknife_on_h = self.jackknife_on_h();
+        let mark = |t: Terms| Terms {
+            jackknife_on_h,
+            ..t
+        };
         if pts.first().map(|q| q.seg) == pts.last().map(|q| q.seg) {
-            return segment_terms(pts, shape, with_lever, s_bar);
+            return segment_terms(pts, shape, with_lever, s_bar).map(mark);
         }
         // A jump of the estimate within the window: each stretch between jumps its own similarity
         // and drift, their reduced equations summed (the stretches share only θ and D).
@@ -257,7 +220,21 @@ impl Problem<'_> {
                 Some(sum) => sum.plus(t),
             });
         }
-        total.filter(|t| t.n >= MIN_WINDOW_SAMPLES)
+        total.filter(|t| t.n >= MIN_WINDOW_SAMPLES).map(mark)
+    }
+
+    /// Whether the jackknife's steps (J − J_k)⁻¹·g_k take H = Σ v·v as the Jacobian rather than
+    /// J = Σ v·w: where w's stencil reaches more than twice as far as v's (a 10–20 Hz estimate: h
+    /// one period, h_w three). There w cannot follow a gait v follows, J understates the Jacobian
+    /// along it, and where one window holds much of J, J − J_k is nearly singular: the steps blew
+    /// up to σ of 55–99 ms on two legged validation missions whose Δt was within 2 ms. H exceeds
+    /// the Jacobian by the variance of v's noise instead, small over a whole period; at higher
+    /// rates (h several periods, h_w barely more) J follows what v follows and H's noise share
+    /// would make σ too small (a 200 Hz estimate on a slow ground vehicle: 10σ), so J stays. The
+    /// formal floor keeps J everywhere: wide where J is short, never short (H there made the
+    /// audit of a real recording, evo's ROS example, split S-PTAM into a clock domain of its own).
+    pub(super) fn jackknife_on_h(&self) -> bool {
+        self.hw > 2.0 * self.h
     }
 
     /// Window `w`'s residual at the constant offset `offset_s` with the lever `d`: the mean squared
@@ -745,18 +722,9 @@ impl<'a> PoseData<'a> {
         Problem {
             ref_t: self.ref_t,
             ref_p: self.ref_p,
-            sampler: Sampler {
-                track: self.estimate,
-                rotations: self
-                    .estimate
-                    .q
-                    .iter()
-                    .map(|q| q.to_rotation_matrix().into_inner())
-                    .collect(),
-                gap: self.params.max_gap_s,
-            },
-            h: (2.0 * period).clamp(STENCIL_MIN_S, STENCIL_MAX_S),
-            hw: (2.0 * period).clamp(STENCIL_MIN_S, STENCIL_MAX_S) + 2.0 * period,
+            sampler: Sampler::new(self.estimate, self.params.max_gap_s),
+            h: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S),
+            hw: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S) + 2.0 * period,
         }
     }
 }
