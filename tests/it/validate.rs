@@ -229,8 +229,9 @@ fn one_mission() {
     if let Ok(v) = std::env::var("REF_HZ") {
         s.ref_rate_hz = v.parse().unwrap();
     }
-    // REDRAW=K: the same route, rates, levers and gait K times, the noise, terrain and first
-    // heading drawn again (the scenario's seed moved): how far Δt scatters, against its σ.
+    // REDRAW=K: the same route, rates, levers and gait K times, the noise, terrain, first heading,
+    // both sensors' sampling phases and receipt latencies drawn again (the scenario's seed moved):
+    // how far Δt scatters, against its σ.
     if let Ok(k) = std::env::var("REDRAW") {
         let k: u64 = k.parse().unwrap();
         let t0 = START_NS as f64 * 1e-9;

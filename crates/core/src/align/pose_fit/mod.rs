@@ -39,7 +39,8 @@
 //! (reference noise, the estimate's drift and jitter, the gait, a model error) is nearly independent
 //! of the next's. The standard error of every fitted parameter is the delete-one-window jackknife of
 //! the whole fit, lever included: each window left out in turn (one Newton step of the reduced normal
-//! equations from the full solution), variance (K−1)/K·Σ(θ₋ₖ − θ̄)². It assumes nothing about the
+//! equations from the full solution; below 40 Hz the step takes H = Σ v·v for the Jacobian, see
+//! `SharedFit::jackknife`), variance (K−1)/K·Σ(θ₋ₖ − θ̄)². It assumes nothing about the
 //! residual — not whiteness, not its size — only that windows err independently; it is honest for the
 //! same reason a bootstrap is, and it includes the lever's uncertainty, which moves every window
 //! alike. What no spread can show is an error common to every window of the mission (a latency the
@@ -58,7 +59,7 @@
 //! or in a first look without a lever, can settle at a root of its own a few hundred milliseconds
 //! off, as sharp as the right one.
 //!
-//! A window's σ is its least-squares error s_k (`formal_sigma`: σ̂_k·√H_k/(c·S_k), the
+//! A window's σ is its least-squares error s_k (`formal_sigma`: σ̂_k·√H_k/(c·J_k), the
 //! instrumental-variable form, σ̂_k² its residual per degree of freedom) calibrated by the windows'
 //! scatter about the line through their neighbours:
 //! e_k = Δt_k − (interpolation of Δt_{k−1} and Δt_{k+1} at t_k) is free of any constant and any

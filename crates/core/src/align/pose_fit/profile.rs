@@ -26,7 +26,7 @@ const SEARCH_STEP_S: f64 = 0.05;
 pub struct WindowOffset {
     pub t: f64,
     pub offset_s: f64,
-    /// σ̂_k/√H_k, seconds.
+    /// σ̂_k·√H_k/(c·J_k), seconds (see `formal_sigma`).
     pub formal_sigma_s: f64,
     /// The window's residual RMS, metres.
     pub rms_m: f64,
@@ -253,11 +253,11 @@ impl WindowSolver<'_> {
 /// less the 8 of each stretch's similarity and drift and the offset).
 fn formal_sigma(t: &Terms, c: f64) -> Option<f64> {
     let dof = t.dof() - 1.0;
-    let (h, s) = (t.h[(0, 0)], c * t.j[(0, 0)]);
-    if dof <= 0.0 || h <= 0.0 || s <= 0.0 {
+    let (h, j) = (t.h[(0, 0)], c * t.j[(0, 0)]);
+    if dof <= 0.0 || h <= 0.0 || j <= 0.0 {
         return None;
     }
-    Some((t.rss / dof * h).sqrt() / s)
+    Some((t.rss / dof * h).sqrt() / j)
 }
 
 /// f of the module doc: the factor that makes the windows' σ match their scatter about the line

@@ -417,30 +417,14 @@ impl SharedFit<'_> {
         Some(&ji * h * ji.transpose() * (rss / dof))
     }
 
-    /// The jackknife's Jacobian summed over `terms`, the lever's prior `l` added, its clock columns scaled
-    /// by the secant correction `c`.
-    fn summed_jackknife_jacobian(&self, terms: &[Option<Terms>], l: f64, c: f64) -> DMatrix<f64> {
-        let (m, p) = (self.m, self.p);
-        let mut s = DMatrix::<f64>::zeros(p, p);
-        for t in terms.iter().flatten() {
-            s += t.jackknife_jacobian();
-        }
-        if self.with_lever {
-            for k in 0..3 {
-                s[(m + k, m + k)] += l;
-            }
-        }
-        scale_clock_columns(&mut s, m, c);
-        s
-    }
-
     /// The delete-one-window jackknife at the solution (see the module doc): each window left out
-    /// by one step (H − H_k)⁻¹·g_k of the summed equations less its own; the covariance
+    /// by one step (S − S_k)⁻¹·g_k of the summed equations less its own; the covariance
     /// (K−1)/K·Σ(δ₋ₖ − δ̄)(δ₋ₖ − δ̄)ᵀ of those steps, and the summed H (for the variance
     /// inflation). `None` when fewer than three windows could be left out.
     ///
-    /// The steps take the jackknife's Jacobian ([`Terms::jackknife_jacobian`]: H at 10–20 Hz
-    /// estimates, where the Newton Jacobian J cannot follow a gait, else J).
+    /// S is the Newton Jacobian J (its clock columns with the secant correction), or below 40 Hz
+    /// H itself ([`Problem::jackknife_on_h`]: J's wider stencil cannot follow a gait there). H
+    /// takes no secant correction: c makes up for J's shortfall, which H does not have.
     fn jackknife(
         &self,
         terms: &[Option<Terms>],
@@ -449,15 +433,21 @@ impl SharedFit<'_> {
         c: f64,
     ) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
         let (m, p) = (self.m, self.p);
-        let (h, _, _) = self.summed(terms, d, l, c);
-        let hc = self.summed_jackknife_jacobian(terms, l, c);
+        let (h, j, _) = self.summed(terms, d, l, c);
+        let on_h = self.problem.jackknife_on_h();
+        let whole = if on_h { &h } else { &j };
         let deltas: Vec<DVector<f64>> = terms
             .iter()
             .flatten()
             .filter_map(|t| {
-                let mut tk = t.jackknife_jacobian().clone();
-                scale_clock_columns(&mut tk, m, c);
-                (&hc - tk).lu().solve(&t.g)
+                let own = if on_h {
+                    t.h.clone()
+                } else {
+                    let mut tj = t.j.clone();
+                    scale_clock_columns(&mut tj, m, c);
+                    tj
+                };
+                (whole - own).lu().solve(&t.g)
             })
             .collect();
         if deltas.len() < 3 {

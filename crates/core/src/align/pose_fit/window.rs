@@ -16,8 +16,12 @@ use super::{ClockShape, PoseData, DRIFT_PRIOR_M2S2, MIN_WINDOW_SAMPLES, SCALE_PR
 /// ±10 ms is 0.2 m/s) and at most 0.25 s, seconds. One period, not more: a difference over ±h sees
 /// motion at f in proportion to sin(2πfh)/(2πfh), and a legged robot's gait (2–5 Hz) is the
 /// sharpest timing signal it has; over two periods of a 10 Hz estimate that response is 0.2 at
-/// 2 Hz and negative at 3.5 Hz, and the fit lost the gait. The samples the difference shares
-/// with its point do not correlate their noise (see `sampler.rs`).
+/// 2 Hz and negative at 3.5 Hz, and the fit lost the gait. When h is a whole number of periods
+/// the samples the difference shares with its point do not correlate their noise (see
+/// `sampler.rs`); between 20 and 80 Hz the 50 ms floor is not always one (25–30 Hz: 1.25–1.5
+/// periods; 50 Hz: 2.5), and the instrument's noise then correlates a little with the point's
+/// (the test there shows it at half a period); the validation's 50 Hz missions include it, its
+/// rates probe no further.
 const STENCIL_MIN_S: f64 = 0.05;
 const STENCIL_MAX_S: f64 = 0.25;
 /// A window's search compares its residual on every ⌊n/SEARCH_POINTS⌋-th of its n reference
@@ -47,15 +51,14 @@ pub(super) struct Terms {
     pub(super) rss: f64,
     /// The estimating equations g = Σ v·e over the shared parameters, v the instrument (∂model/∂θ
     /// from central differences over ±h, whose noise is uncorrelated with the point's own although
-    /// they share samples: see `sampler.rs`); h = Σ v·v; j = Σ v·w with w the same derivative
+    /// they share samples where h is a whole number of periods: see [`STENCIL_MIN_S`]); h = Σ v·v
+    /// (the jackknife's Jacobian below 40 Hz, [`Problem::jackknife_on_h`]); j = Σ v·w with w the same derivative
     /// over two of the estimate's periods more (mostly other samples than v's; the cubics at the
     /// ends share one or two): the Newton Jacobian of g, nearly free of the bias Σ v·v takes from
     /// v's noise, which steps the fits. The window's
     /// similarity and drift eliminated (Schur complement).
     pub(super) h: DMatrix<f64>,
     pub(super) j: DMatrix<f64>,
-    /// Whether the jackknife takes h rather than j as the Jacobian ([`Problem::jackknife_on_h`]).
-    pub(super) jackknife_on_h: bool,
     pub(super) g: DVector<f64>,
     /// Σ (p_ref − p̄_ref)·R(u − ū) and Σ|u − ū|²: the window's scale evidence.
     pub(super) tr: f64,
@@ -104,15 +107,6 @@ impl Terms {
         (3 * self.n) as f64 - 8.0 * self.segments as f64
     }
 
-    /// The Jacobian the jackknife's steps take: h or j ([`Problem::jackknife_on_h`]).
-    pub(super) fn jackknife_jacobian(&self) -> &DMatrix<f64> {
-        if self.jackknife_on_h {
-            &self.h
-        } else {
-            &self.j
-        }
-    }
-
     /// The window's residual RMS, metres.
     pub(super) fn rms_m(&self) -> f64 {
         (self.rss / self.n as f64).sqrt()
@@ -125,7 +119,6 @@ impl Terms {
             rss: self.rss + o.rss,
             h: self.h + o.h,
             j: self.j + o.j,
-            jackknife_on_h: self.jackknife_on_h,
             g: self.g + o.g,
             tr: self.tr + o.tr,
             s_uu: self.s_uu + o.s_uu,
@@ -157,7 +150,6 @@ fn segment_terms(pts: Vec<Pt>, shape: &ClockShape, with_lever: bool, s_bar: f64)
         rss,
         h,
         j,
-        jackknife_on_h: false,
         g,
         tr: nuisance.tr,
         s_uu: nuisance.s_uu,
@@ -200,13 +192,8 @@ impl Problem<'_> {
         if pts.len() < MIN_WINDOW_SAMPLES {
             return None;
         }
-        let jackknife_on_h = self.jackknife_on_h();
-        let mark = |t: Terms| Terms {
-            jackknife_on_h,
-            ..t
-        };
         if pts.first().map(|q| q.seg) == pts.last().map(|q| q.seg) {
-            return segment_terms(pts, shape, with_lever, s_bar).map(mark);
+            return segment_terms(pts, shape, with_lever, s_bar);
         }
         // A jump of the estimate within the window: each stretch between jumps its own similarity
         // and drift, their reduced equations summed (the stretches share only θ and D).
@@ -220,12 +207,13 @@ impl Problem<'_> {
                 Some(sum) => sum.plus(t),
             });
         }
-        total.filter(|t| t.n >= MIN_WINDOW_SAMPLES).map(mark)
+        total.filter(|t| t.n >= MIN_WINDOW_SAMPLES)
     }
 
     /// Whether the jackknife's steps (J − J_k)⁻¹·g_k take H = Σ v·v as the Jacobian rather than
-    /// J = Σ v·w: where w's stencil reaches more than twice as far as v's (a 10–20 Hz estimate: h
-    /// one period, h_w three). There w cannot follow a gait v follows, J understates the Jacobian
+    /// J = Σ v·w: where w's stencil reaches more than twice as far as v's, an estimate below 40 Hz
+    /// (at 10 and 20 Hz h is one period and h_w three; the validation draws 10, 20, 50, 100 and
+    /// 200 Hz, so rates below 10 Hz and from 25 to 40 Hz take H unvalidated). There w cannot follow a gait v follows, J understates the Jacobian
     /// along it, and where one window holds much of J, J − J_k is nearly singular: the steps blew
     /// up to σ of 55–99 ms on two legged validation missions whose Δt was within 2 ms. H exceeds
     /// the Jacobian by the variance of v's noise instead, small over a whole period; at higher
