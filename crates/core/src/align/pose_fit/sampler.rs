@@ -207,62 +207,70 @@ mod tests {
         assert!((at.p.x - p[40].x).abs() < 1e-12);
     }
 
+    /// A track of x = t² sampled at `t` with `jumps`, bridging gaps up to `gap`: at each `(x, a)`
+    /// of `lines` the pose is the line between samples a and a + 1, at each x of `cubics` the cubic
+    /// (exact on t²), and at each x of `none` there is none.
+    fn check_t_squared(
+        t: &[f64],
+        jumps: &[(f64, f64)],
+        gap: f64,
+        lines: &[(f64, usize)],
+        cubics: &[f64],
+        none: &[f64],
+    ) {
+        let p: Vec<Vector3<f64>> = t.iter().map(|&t| Vector3::new(t * t, 0.0, 0.0)).collect();
+        let q = vec![UnitQuaternion::identity(); t.len()];
+        let s = Sampler::new(track(t, &p, &q, jumps), gap);
+        let mut hint = 0;
+        for &(x, a) in lines {
+            let f = (x - t[a]) / (t[a + 1] - t[a]);
+            let line = p[a].x + (p[a + 1].x - p[a].x) * f;
+            let got = s.at(x, &mut hint).unwrap().p.x;
+            assert!(
+                (got - line).abs() < 1e-12,
+                "{x}: {got} is not the line's {line}"
+            );
+        }
+        for &x in cubics {
+            let got = s.at(x, &mut hint).unwrap().p.x;
+            assert!(
+                (got - x * x).abs() < 1e-12,
+                "{x}: {got} is not the cubic's {}",
+                x * x
+            );
+        }
+        for &x in none {
+            assert!(s.at(x, &mut hint).is_none(), "{x}");
+        }
+    }
+
     /// Across a jump of the estimate (between two samples, or spanning several), a gap, or very
     /// uneven steps, the pose is the straight line between its two samples.
     #[test]
     fn falls_back_to_the_line_near_a_jump_a_gap_or_uneven_steps() {
-        let t = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 1.9, 2.0, 2.1, 2.15, 2.6, 2.7];
-        let p: Vec<Vector3<f64>> = t.iter().map(|&t| Vector3::new(t * t, 0.0, 0.0)).collect();
-        let q = vec![UnitQuaternion::identity(); t.len()];
-        // A jump between 0.3 and 0.4.
-        let jumps = [(0.3, 0.4)];
-        let s = Sampler::new(track(&t, &p, &q, &jumps), 1.5);
-        let line = |x: f64, a: usize| {
-            let f = (x - t[a]) / (t[a + 1] - t[a]);
-            p[a].x + (p[a + 1].x - p[a].x) * f
-        };
-        let mut hint = 0;
-        // Inside one stretch of even steps: the cubic, exact on t².
-        assert!((s.at(0.15, &mut hint).unwrap().p.x - 0.0225).abs() < 1e-12);
-        // The four samples around 0.25 reach across the jump; those around 0.45 too.
-        for (x, a) in [(0.25, 2), (0.45, 4)] {
-            assert!(
-                (s.at(x, &mut hint).unwrap().p.x - line(x, a)).abs() < 1e-12,
-                "{x}"
-            );
-        }
-        // Beside the 1.4 s gap (bridged: it is within 1.5 s), and uneven steps (0.05 then 0.45).
-        for (x, a) in [(1.95, 6), (2.12, 8), (2.3, 9)] {
-            assert!(
-                (s.at(x, &mut hint).unwrap().p.x - line(x, a)).abs() < 1e-12,
-                "{x}"
-            );
-        }
-
-        // Even steps, a jump spanning samples 2 to 4 (its start reached from the left, its end from
-        // the right), and a gap of 0.18 s beyond the 0.15 s bridged (its ratio to 0.1 s passes).
-        let t = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.88, 0.98, 1.08];
-        let p: Vec<Vector3<f64>> = t.iter().map(|&t| Vector3::new(t * t, 0.0, 0.0)).collect();
-        let q = vec![UnitQuaternion::identity(); t.len()];
-        let jumps = [(0.2, 0.4)];
-        let s = Sampler::new(track(&t, &p, &q, &jumps), 0.15);
-        let line = |x: f64, a: usize| {
-            let f = (x - t[a]) / (t[a + 1] - t[a]);
-            p[a].x + (p[a + 1].x - p[a].x) * f
-        };
-        let mut hint = 0;
-        // Samples 0–3 hold the jump's start (0.2 → 0.3); samples 3–6 its end (0.3 → 0.4).
-        for (x, a) in [(0.15, 1), (0.45, 4)] {
-            assert!(
-                (s.at(x, &mut hint).unwrap().p.x - line(x, a)).abs() < 1e-12,
-                "{x}"
-            );
-        }
-        // Clear of both: the cubic, exact on t².
-        assert!((s.at(0.55, &mut hint).unwrap().p.x - 0.3025).abs() < 1e-12);
-        // Beside the gap: the line (its outer step is the gap); across it, nothing.
-        assert!((s.at(0.65, &mut hint).unwrap().p.x - line(0.65, 6)).abs() < 1e-12);
-        assert!(s.at(0.8, &mut hint).is_none());
+        // A jump between 0.3 and 0.4: the four samples around 0.25 reach across it, those around
+        // 0.45 too; a 1.4 s gap (bridged: within 1.5 s) and uneven steps (0.05 then 0.45). Inside
+        // one stretch of even steps (0.15): the cubic.
+        check_t_squared(
+            &[0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 1.9, 2.0, 2.1, 2.15, 2.6, 2.7],
+            &[(0.3, 0.4)],
+            1.5,
+            &[(0.25, 2), (0.45, 4), (1.95, 6), (2.12, 8), (2.3, 9)],
+            &[0.15],
+            &[],
+        );
+        // Even steps, a jump spanning samples 2 to 4 (samples 0–3 hold its start, 0.2 → 0.3, and
+        // samples 3–6 its end, 0.3 → 0.4), and a gap of 0.18 s beyond the 0.15 s bridged (its
+        // ratio to 0.1 s passes): the line beside the gap, nothing across it, the cubic clear of
+        // both.
+        check_t_squared(
+            &[0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.88, 0.98, 1.08],
+            &[(0.2, 0.4)],
+            0.15,
+            &[(0.15, 1), (0.45, 4), (0.65, 6)],
+            &[0.55],
+            &[0.8],
+        );
     }
 
     /// The noise the instrument shares with its point: white noise on evenly spaced samples, the
