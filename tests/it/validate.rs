@@ -249,10 +249,14 @@ fn one_mission() {
                 _ => 0.5 * m.duration_s,
             };
             let e = o.offset_s - d.offset_at(mid);
+            let lever = o.fitted_lever_m.unwrap_or([f64::NAN; 3]);
             println!(
-                "draw {r}: error {:+.1} ms, σ {:.1} ms",
+                "draw {r}: error {:+.1} ms, σ {:.1} ms, lever error ({:+.3}, {:+.3}, {:+.3}) m",
                 e * 1e3,
-                o.sigma_s.unwrap_or(f64::NAN) * 1e3
+                o.sigma_s.unwrap_or(f64::NAN) * 1e3,
+                lever[0] - (d.est_lever_m[0] - d.ref_lever_m[0]),
+                lever[1] - (d.est_lever_m[1] - d.ref_lever_m[1]),
+                lever[2] - (d.est_lever_m[2] - d.ref_lever_m[2]),
             );
             errors.push(e);
         }

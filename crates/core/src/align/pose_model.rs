@@ -226,8 +226,8 @@ impl Mission<'_, '_> {
         }
     }
 
-    /// One pass: the profile with the lever `lever` held (the mission's scale and the secant
-    /// correction `scale`), each window started from the clock `clock`, and what
+    /// One pass: the profile with the lever `lever` held (the mission's scale and the scale of
+    /// the clock column, `scale`: [`PoseFit::jacobian_scale`]), each window started from the clock `clock`, and what
     /// [`Self::decide`] makes of it. `None` with fewer than three windows in the profile.
     fn pass(
         &self,
@@ -261,7 +261,7 @@ impl Mission<'_, '_> {
     }
 
     /// The model chosen from `profile` (measured with `lever` held, at the mission's scale and
-    /// secant correction `scale`, its windows started from a clock whose first parameter is
+    /// the clock column's scale `scale`, its windows started from a clock whose first parameter is
     /// `clock_s`) and its parameters fitted with the lever over every window, σ by the jackknife
     /// over windows, at least the formal σ (the whole mission's fit when that is the constant).
     fn decide(

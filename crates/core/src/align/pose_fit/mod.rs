@@ -39,14 +39,15 @@
 //! (reference noise, the estimate's drift and jitter, the gait, a model error) is nearly independent
 //! of the next's. The standard error of every fitted parameter is the delete-one-window jackknife of
 //! the whole fit, lever included: each window left out in turn (one Newton step of the reduced normal
-//! equations from the full solution; below 40 Hz the step takes H = Σ v·v for the Jacobian, see
-//! `SharedFit::jackknife`), variance (K−1)/K·Σ(θ₋ₖ − θ̄)². It assumes nothing about the
+//! equations from the full solution, with the Jacobian S of the estimating equations measured at the
+//! solution: their change over a shift of the clock, see `SharedFit::jacobians`), variance
+//! (K−1)/K·Σ(θ₋ₖ − θ̄)². It assumes nothing about the
 //! residual — not whiteness, not its size — only that windows err independently; it is honest for the
 //! same reason a bootstrap is, and it includes the lever's uncertainty, which moves every window
 //! alike. What no spread can show is an error common to every window of the mission (a latency the
 //! recorder adds to every stamp is, by definition, part of the offset). With the 8–30 windows of a
 //! mission the jackknife's variance is itself uncertain (by 25–50 %), and where it falls short the
-//! error is several of its σ; so each parameter's σ is at least its formal one, J⁻¹·σ̂²H·J⁻ᵀ with σ̂²
+//! error is several of its σ; so each parameter's σ is at least its formal one, S⁻¹·σ̂²H·S⁻ᵀ with σ̂²
 //! the residual per degree of freedom — what the residuals would give were they white, the least the
 //! noise allows (on white noise it is the spread of the answers: a test draws the noise 40 times). On
 //! the validation's 1399 constant clocks this halved the errors beyond 3σ (39 → 20) and moved no Δt
@@ -148,6 +149,15 @@ impl ClockShape {
         false
     }
 
+    /// The parameters' change that shifts Δt(t) by one second everywhere.
+    pub(super) fn uniform_shift(&self) -> Vec<f64> {
+        match self {
+            ClockShape::Constant => vec![1.0],
+            ClockShape::Linear { .. } => vec![1.0, 0.0],
+            ClockShape::Piecewise { changes } => vec![1.0; changes.len() + 1],
+        }
+    }
+
     /// φ(t) into `out` (length [`Self::len`]).
     fn basis(&self, t: f64, out: &mut [f64]) {
         match self {
@@ -195,8 +205,9 @@ pub struct PoseFit {
     pub rms_m: Vec<f64>,
     /// The mission's scale (estimate distances over reference distances, ≈ 1 + scale error).
     pub scale: f64,
-    /// The secant correction of the Jacobian's clock columns (see `solve`); the profile's windows
-    /// use it too.
+    /// The scale of the analytic Jacobian's clock columns the profile's windows use: the measured
+    /// slope of the estimating equations over the analytic one along a shift of the whole clock
+    /// (see `SharedFit::jacobians`; the iteration's secant correction where it cannot be measured).
     pub jacobian_scale: f64,
     pub iterations: usize,
     pub converged: bool,

@@ -35,8 +35,8 @@ pub struct WindowOffset {
 }
 
 impl WindowOffset {
-    /// Window `w`'s offset `offset_s`, with its reduced equations `t` there (`c`: the whole fit's
-    /// secant correction); `None` when the window has no formal σ.
+    /// Window `w`'s offset `offset_s`, with its reduced equations `t` there (`c`: the scale of the
+    /// clock column, [`PoseFit::jacobian_scale`]); `None` when the window has no formal σ.
     fn of(w: &Window, offset_s: f64, t: &Terms, c: f64) -> Option<WindowOffset> {
         Some(WindowOffset {
             t: w.t(),
@@ -117,8 +117,7 @@ struct WindowSolver<'a> {
     lever_m: Vector3<f64>,
     /// The mission's scale (the centre of the window's scale prior).
     scale: f64,
-    /// The whole fit's secant correction c of the Jacobian (see
-    /// [`SharedFit::secant_correction`](super::shared::SharedFit::secant_correction)).
+    /// The scale c of the Jacobian's clock column, [`PoseFit::jacobian_scale`] of the whole fit.
     jacobian_scale: f64,
 }
 
@@ -249,7 +248,7 @@ impl WindowSolver<'_> {
 }
 
 /// A window's least-squares error of its one offset, seconds: σ̂·√H/(c·J) (the instrumental-variable
-/// form, c the whole fit's secant correction; σ̂² the residual per degree of freedom: 3 per point
+/// form, c the whole fit's measured scale of the clock column; σ̂² the residual per degree of freedom: 3 per point
 /// less the 8 of each stretch's similarity and drift and the offset).
 fn formal_sigma(t: &Terms, c: f64) -> Option<f64> {
     let dof = t.dof() - 1.0;

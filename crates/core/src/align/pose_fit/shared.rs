@@ -21,6 +21,11 @@ pub(super) const MAX_STEP_S: f64 = 0.1;
 /// A window whose residual RMS exceeds this many times the median window's is left out (what the
 /// jump finder missed: a jump too small to find, an estimate that goes astray for a while).
 pub(super) const OUTLIER_RMS_FACTOR: f64 = 4.0;
+/// The scale of the clock column handed to the profile's windows is kept within these, the secant
+/// correction's range: it steps their Newton iterations, and below 1 they overshoot. A whole fit
+/// across a clock step (its constant a misfit) measured 0.38, and every window of the profile then
+/// failed to converge.
+const PROFILE_SCALE_RANGE: (f64, f64) = (1.0, 4.0);
 
 /// Fits the clock `shape` (from `theta0`) and, when `with_lever`, the lever (from `lever0`) over
 /// `windows`; windows whose residual RMS is an outlier are left out and the fit repeated.
@@ -397,57 +402,140 @@ impl SharedFit<'_> {
         (step, g, h.diagonal())
     }
 
-    /// The formal covariance J⁻¹·σ̂²H·J⁻ᵀ of the summed equations, σ̂² the residual per degree of
-    /// freedom (white residuals assumed). J, not the jackknife's H: where J understates the
-    /// Jacobian along a gait this floor is wide, never short.
+    /// Each window's Jacobian of its estimating equations at (`theta`, `d`, `scale`), `terms`
+    /// there, and their sum with the lever's prior (weight `l`). The clock columns are measured:
+    /// the equations' change over θ_i ± δ_i (δ_i moving Δt by half the instrument's half-step at
+    /// most, `Self::probe_steps`); the lever's are the analytic ones (no time derivative in them).
+    /// When a shift gains or loses a window, the analytic clock columns scaled by the iteration's
+    /// secant correction `c` instead.
+    ///
+    /// Why measured, for the error bar only (the iteration, and whether it converged, keep the
+    /// analytic J, which steers it well): J's clock columns are a derivative over a wider stencil
+    /// than the instrument's, and
+    /// the secant correction that makes up for it only grows. Where the estimate's stamps jitter
+    /// (taken at receipt: a 200 Hz estimate whose stamps wander by more than its period) the steps
+    /// undo each other from noise and c climbed to 2–4 where the equations' slope was 1.2–1.4
+    /// times J, and σ came out short by that factor (receipt-stamp missions whose Δt scattered by
+    /// 4 ms over fresh noise reported 1–2 ms). Below 40 Hz J misses a gait the instrument follows:
+    /// J − J_k went near-singular in the jackknife, and a formal floor on J was tens of
+    /// milliseconds on legged missions whose Δt was within 1 ms. The measured slope has neither
+    /// fault at any rate; and where one constant is fitted across a clock step, it says how little
+    /// the equations pin it (σ of seconds where J claimed 45 ms). docs/evidence.md, "The slope,
+    /// measured".
+    pub(super) fn jacobians(
+        &self,
+        (theta, d, scale): (&[f64], &Vector3<f64>, f64),
+        terms: &[Option<Terms>],
+        l: f64,
+        c: f64,
+    ) -> Jacobians {
+        let m = self.m;
+        let measured = || -> Option<Vec<Option<DMatrix<f64>>>> {
+            let mut own: Vec<Option<DMatrix<f64>>> = terms
+                .iter()
+                .map(|t| t.as_ref().map(|t| t.j.clone()))
+                .collect();
+            for (i, step) in self.probe_steps().into_iter().enumerate() {
+                let at = |sign: f64| {
+                    let mut shifted = theta.to_vec();
+                    shifted[i] += sign * step;
+                    self.eval(&shifted, d, scale)
+                };
+                let (plus, minus) = (at(1.0), at(-1.0));
+                for ((j, a), b) in own.iter_mut().zip(&plus).zip(&minus) {
+                    match (j, a, b) {
+                        (Some(j), Some(a), Some(b)) => {
+                            j.set_column(i, &((&a.g - &b.g) / (2.0 * step)));
+                        }
+                        (None, None, None) => {}
+                        _ => return None,
+                    }
+                }
+            }
+            Some(own)
+        };
+        let own = measured().unwrap_or_else(|| {
+            terms
+                .iter()
+                .map(|t| {
+                    t.as_ref().map(|t| {
+                        let mut j = t.j.clone();
+                        scale_clock_columns(&mut j, m, c);
+                        j
+                    })
+                })
+                .collect()
+        });
+        let mut whole = own
+            .iter()
+            .flatten()
+            .fold(DMatrix::zeros(self.p, self.p), |a, j| a + j);
+        if self.with_lever {
+            for k in m..self.p {
+                whole[(k, k)] += l;
+            }
+        }
+        Jacobians { own, whole }
+    }
+
+    /// The shift of each clock parameter that moves Δt by half the instrument's half-step at most
+    /// over the windows (a linear drift's slope by that over the farthest window's distance from
+    /// the mid). Half the instrument's half-step (25 ms at 20 Hz and above, half a period below):
+    /// over less than an estimate's period the equations are rough — the instrument's change with
+    /// Δt is the interpolated track's local slope, mostly the estimate's noise at 100–200 Hz, and
+    /// against the reference's noise in the residual it flattened the slope measured over ±2 ms to
+    /// a quarter of its value over ±10 ms or more (σ 0.35 s on a turn in place whose Δt was within
+    /// 0.1 ms); a gait at 2–3.5 Hz keeps 90 % of its slope over ±25 ms.
+    fn probe_steps(&self) -> Vec<f64> {
+        let probe_s = 0.5 * self.problem.half_step_s();
+        let mut reach = vec![0.0f64; self.m];
+        let mut phi = vec![0.0; self.m];
+        for w in self.windows {
+            for t in [w.t_start, w.t_end] {
+                self.shape.basis(t, &mut phi);
+                for (r, v) in reach.iter_mut().zip(&phi) {
+                    *r = r.max(v.abs());
+                }
+            }
+        }
+        reach
+            .into_iter()
+            .map(|r| if r > 0.0 { probe_s / r } else { probe_s })
+            .collect()
+    }
+
+    /// The formal covariance S⁻¹·σ̂²H·S⁻ᵀ of the summed equations (S the measured Jacobian
+    /// `jac`, H = Σ v·v with the lever's prior `l`), σ̂² the residual per degree of freedom (white
+    /// residuals assumed).
     pub(super) fn formal_covariance(
         &self,
         terms: &[Option<Terms>],
+        jac: &Jacobians,
         d: &Vector3<f64>,
         l: f64,
-        c: f64,
     ) -> Option<DMatrix<f64>> {
-        let (h, j, _) = self.summed(terms, d, l, c);
+        let (h, _, _) = self.summed(terms, d, l, 1.0);
         let (rss, _) = residual_sums(terms);
         let dof = terms.iter().flatten().map(Terms::dof).sum::<f64>() - self.p as f64;
         if dof <= 0.0 {
             return None;
         }
-        let ji = j.try_inverse()?;
-        Some(&ji * h * ji.transpose() * (rss / dof))
+        let si = jac.whole.clone().try_inverse()?;
+        Some(&si * h * si.transpose() * (rss / dof))
     }
 
     /// The delete-one-window jackknife at the solution (see the module doc): each window left out
-    /// by one step (S − S_k)⁻¹·g_k of the summed equations less its own; the covariance
-    /// (K−1)/K·Σ(δ₋ₖ − δ̄)(δ₋ₖ − δ̄)ᵀ of those steps, and the summed H (for the variance
-    /// inflation). `None` when fewer than three windows could be left out.
-    ///
-    /// S is the Newton Jacobian J (its clock columns with the secant correction), or below 40 Hz
-    /// H itself ([`Problem::jackknife_on_h`]: J's wider stencil cannot follow a gait there). H
-    /// takes no secant correction: c makes up for J's shortfall, which H does not have.
-    fn jackknife(
-        &self,
-        terms: &[Option<Terms>],
-        d: &Vector3<f64>,
-        l: f64,
-        c: f64,
-    ) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
-        let (m, p) = (self.m, self.p);
-        let (h, j, _) = self.summed(terms, d, l, c);
-        let on_h = self.problem.jackknife_on_h();
-        let whole = if on_h { &h } else { &j };
+    /// by one step (S − S_k)⁻¹·g_k of the summed equations less its own, S the measured Jacobian
+    /// ([`Self::jacobians`]); the covariance (K−1)/K·Σ(δ₋ₖ − δ̄)(δ₋ₖ − δ̄)ᵀ of those steps.
+    /// `None` when fewer than three windows could be left out.
+    fn jackknife(&self, terms: &[Option<Terms>], jac: &Jacobians) -> Option<DMatrix<f64>> {
+        let p = self.p;
         let deltas: Vec<DVector<f64>> = terms
             .iter()
-            .flatten()
-            .filter_map(|t| {
-                let own = if on_h {
-                    t.h.clone()
-                } else {
-                    let mut tj = t.j.clone();
-                    scale_clock_columns(&mut tj, m, c);
-                    tj
-                };
-                (whole - own).lu().solve(&t.g)
+            .zip(&jac.own)
+            .filter_map(|(t, own)| {
+                let (t, own) = (t.as_ref()?, own.as_ref()?);
+                (&jac.whole - own).lu().solve(&t.g)
             })
             .collect();
         if deltas.len() < 3 {
@@ -461,7 +549,30 @@ impl SharedFit<'_> {
             cov += &c * c.transpose();
         }
         cov *= (kf - 1.0) / kf;
-        Some((cov, h))
+        Some(cov)
+    }
+
+    /// The scale of the clock columns for the profile's windows: the measured Jacobian's over the
+    /// analytic one's along a shift of the whole clock, within [`PROFILE_SCALE_RANGE`]; the
+    /// iteration's `c` when they disagree in sign.
+    fn profile_scale(&self, jac: &Jacobians, terms: &[Option<Terms>], c: f64) -> f64 {
+        let m = self.m;
+        let analytic = terms
+            .iter()
+            .flatten()
+            .fold(DMatrix::<f64>::zeros(self.p, self.p), |a, t| a + &t.j);
+        let u = self.shape.uniform_shift();
+        let along = |a: &DMatrix<f64>| -> f64 {
+            (0..m)
+                .map(|r| u[r] * (0..m).map(|k| a[(r, k)] * u[k]).sum::<f64>())
+                .sum()
+        };
+        let (num, den) = (along(&jac.whole), along(&analytic));
+        if num > 0.0 && den > 0.0 {
+            (num / den).clamp(PROFILE_SCALE_RANGE.0, PROFILE_SCALE_RANGE.1)
+        } else {
+            c
+        }
     }
 
     /// The fit at the solution `x`: the standard errors (the jackknife's, at least the formal
@@ -469,19 +580,22 @@ impl SharedFit<'_> {
     /// inflation of Δt by the lever.
     fn finish(&self, x: Iterate, iterations: usize) -> Option<PoseFit> {
         let (m, p, with_lever) = (self.m, self.p, self.with_lever);
-        let (d, c) = (x.lever_m, x.jacobian_scale);
+        let d = x.lever_m;
         let l = lever_weight(&x.terms);
-        let remaining = self.normal(&x.terms, &d, l, c, 0.0).0;
+        let jac = self.jacobians((&x.theta, &d, x.scale), &x.terms, l, x.jacobian_scale);
+        // The Newton step left, as the iteration steps (its Jacobian, not the error bar's).
+        let remaining = self.normal(&x.terms, &d, l, x.jacobian_scale, 0.0).0;
+        let (h, _, _) = self.summed(&x.terms, &d, l, 1.0);
         let used: Vec<(&Window, &Terms)> = self
             .windows
             .iter()
             .zip(&x.terms)
             .filter_map(|(w, t)| t.as_ref().map(|t| (w, t)))
             .collect();
-        let (mut cov, h) = self.jackknife(&x.terms, &d, l, c)?;
+        let mut cov = self.jackknife(&x.terms, &jac)?;
         // The formal σ is the floor (see the module doc): each parameter's variance raised to it,
         // the jackknife's correlations kept.
-        if let Some(formal) = self.formal_covariance(&x.terms, &d, l, c) {
+        if let Some(formal) = self.formal_covariance(&x.terms, &jac, &d, l) {
             let raise: Vec<f64> = (0..p)
                 .map(|k| {
                     let (jack, floor) = (cov[(k, k)], formal[(k, k)]);
@@ -533,7 +647,7 @@ impl SharedFit<'_> {
             outliers: Vec::new(),
             rms_m: used.iter().map(|(_, t)| t.rms_m()).collect(),
             scale: x.scale,
-            jacobian_scale: c,
+            jacobian_scale: self.profile_scale(&jac, &x.terms, x.jacobian_scale),
             iterations,
             converged: converged && used.len() >= 3,
         })
@@ -562,6 +676,13 @@ fn merit(g: &DVector<f64>, scales: &DVector<f64>) -> f64 {
         .zip(scales.iter())
         .map(|(g, h)| if *h > 0.0 { g * g / h } else { 0.0 })
         .sum::<f64>()
+}
+
+/// Each window's Jacobian of its estimating equations (`None` where the window has none) and
+/// their sum with the lever's prior: what the error bar linearises the fit with.
+pub(super) struct Jacobians {
+    own: Vec<Option<DMatrix<f64>>>,
+    whole: DMatrix<f64>,
 }
 
 /// The Jacobian's `m` clock columns of `j` scaled by the secant correction `c`.

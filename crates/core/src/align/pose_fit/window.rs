@@ -52,11 +52,11 @@ pub(super) struct Terms {
     /// The estimating equations g = Σ v·e over the shared parameters, v the instrument (∂model/∂θ
     /// from central differences over ±h, whose noise is uncorrelated with the point's own although
     /// they share samples where h is a whole number of periods: see [`STENCIL_MIN_S`]); h = Σ v·v
-    /// (the jackknife's Jacobian below 40 Hz, [`Problem::jackknife_on_h`]); j = Σ v·w with w the
-    /// same derivative over two of the estimate's periods more (mostly other samples than v's; the
-    /// cubics at the ends share one or two): the Newton Jacobian of g, nearly free of the bias
-    /// Σ v·v takes from v's noise, which steps the fits. The window's similarity and drift
-    /// eliminated (Schur complement).
+    /// (the formal σ's middle); j = Σ v·w with w the same derivative over two of the estimate's
+    /// periods more (mostly other samples than v's; the cubics at the ends share one or two): the
+    /// Newton Jacobian of g, nearly free of the bias Σ v·v takes from v's noise, which steps the
+    /// fits (the error bar measures the clock columns instead: `SharedFit::jacobians`). The
+    /// window's similarity and drift eliminated (Schur complement).
     pub(super) h: DMatrix<f64>,
     pub(super) j: DMatrix<f64>,
     pub(super) g: DVector<f64>,
@@ -210,22 +210,9 @@ impl Problem<'_> {
         total.filter(|t| t.n >= MIN_WINDOW_SAMPLES)
     }
 
-    /// Whether the jackknife's steps (J − J_k)⁻¹·g_k take H = Σ v·v as the Jacobian rather than
-    /// J = Σ v·w: where w's stencil reaches more than twice as far as v's, an estimate below 40 Hz
-    /// (at 10 and 20 Hz h is one period and h_w three; the validation draws 10, 20, 50, 100 and
-    /// 200 Hz, so rates below 10 Hz and from 25 to 40 Hz take H unvalidated). There w cannot
-    /// follow a gait v follows, J understates the Jacobian along it, and where one window holds
-    /// much of J, J − J_k is nearly singular: in a trial build that kept J the steps blew up to σ
-    /// of 55–99 ms on two legged validation missions whose Δt was within 2 ms. H exceeds the
-    /// Jacobian by the variance of v's noise instead, small over a whole period; at higher rates
-    /// (h several periods, h_w barely more) J follows what v follows and H's noise share would
-    /// make σ too small (in a trial with H at every rate, a 200 Hz estimate on a slow ground
-    /// vehicle came out 10σ off), so J stays. The formal floor keeps J everywhere: wide where J is
-    /// short, never short (H there, in a trial, made the audit of a real recording, evo's ROS
-    /// example, split S-PTAM into a clock domain of its own). docs/evidence.md, "The gait,
-    /// followed".
-    pub(super) fn jackknife_on_h(&self) -> bool {
-        self.hw > 2.0 * self.h
+    /// The instrument's half-step h, seconds (see [`STENCIL_MIN_S`]).
+    pub(super) fn half_step_s(&self) -> f64 {
+        self.h
     }
 
     /// Window `w`'s residual at the constant offset `offset_s` with the lever `d`: the mean squared
