@@ -227,8 +227,8 @@ impl Mission<'_, '_> {
     }
 
     /// One pass: the profile with the lever `lever` held (the mission's scale and the scale of
-    /// the clock column, `scale`: [`PoseFit::jacobian_scale`]), each window started from the clock `clock`, and what
-    /// [`Self::decide`] makes of it. `None` with fewer than three windows in the profile.
+    /// the clock column, `scale`: [`PoseFit::jacobian_scale`]), each window started from the clock
+    /// `clock`, and what [`Self::decide`] makes of it. `None` with fewer than three windows in the profile.
     fn pass(
         &self,
         lever: Vector3<f64>,

@@ -36,7 +36,7 @@ pub struct WindowOffset {
 
 impl WindowOffset {
     /// Window `w`'s offset `offset_s`, with its reduced equations `t` there (`c`: the scale of the
-    /// clock column, [`PoseFit::jacobian_scale`]); `None` when the window has no formal σ.
+    /// clock column, [`super::PoseFit::jacobian_scale`]); `None` when the window has no formal σ.
     fn of(w: &Window, offset_s: f64, t: &Terms, c: f64) -> Option<WindowOffset> {
         Some(WindowOffset {
             t: w.t(),
@@ -117,7 +117,8 @@ struct WindowSolver<'a> {
     lever_m: Vector3<f64>,
     /// The mission's scale (the centre of the window's scale prior).
     scale: f64,
-    /// The scale c of the Jacobian's clock column, [`PoseFit::jacobian_scale`] of the whole fit.
+    /// The scale c of the Jacobian's clock column: the whole fit's
+    /// [`super::PoseFit::jacobian_scale`].
     jacobian_scale: f64,
 }
 
@@ -248,8 +249,8 @@ impl WindowSolver<'_> {
 }
 
 /// A window's least-squares error of its one offset, seconds: σ̂·√H/(c·J) (the instrumental-variable
-/// form, c the whole fit's measured scale of the clock column; σ̂² the residual per degree of freedom: 3 per point
-/// less the 8 of each stretch's similarity and drift and the offset).
+/// form, c the whole fit's measured scale of the clock column; σ̂² the residual per degree of
+/// freedom: 3 per point less the 8 of each stretch's similarity and drift and the offset).
 fn formal_sigma(t: &Terms, c: f64) -> Option<f64> {
     let dof = t.dof() - 1.0;
     let (h, j) = (t.h[(0, 0)], c * t.j[(0, 0)]);
