@@ -22,9 +22,9 @@ pub(super) const MAX_STEP_S: f64 = 0.1;
 /// jump finder missed: a jump too small to find, an estimate that goes astray for a while).
 pub(super) const OUTLIER_RMS_FACTOR: f64 = 4.0;
 /// The scale of the clock column handed to the profile's windows is kept within these, the secant
-/// correction's range: it steps their Newton iterations, and below 1 they overshoot. A whole fit
-/// across a clock step (its constant a misfit) measured 0.38, and every window of the profile then
-/// failed to converge.
+/// correction's range: it steps their Newton iterations. A whole fit across a clock step (its
+/// constant a misfit, whose equations barely change with it) measured 0.38, and every window of
+/// the profile, stepped 2.6 times too far by it, failed to converge.
 const PROFILE_SCALE_RANGE: (f64, f64) = (1.0, 4.0);
 
 /// Fits the clock `shape` (from `theta0`) and, when `with_lever`, the lever (from `lever0`) over
@@ -354,7 +354,7 @@ impl SharedFit<'_> {
     /// The reduced equations summed over the windows with the lever's prior (weight `l`, centred
     /// on 0, at the lever `d`) added, the Jacobian's clock columns scaled by the secant correction
     /// `c`: (H, J, g).
-    fn summed(
+    pub(super) fn summed(
         &self,
         terms: &[Option<Terms>],
         d: &Vector3<f64>,
@@ -372,11 +372,11 @@ impl SharedFit<'_> {
             j += &t.j;
             g += &t.g;
         }
+        self.add_lever_prior(&mut h, l);
+        self.add_lever_prior(&mut j, l);
         if self.with_lever {
-            for c in 0..3 {
-                h[(m + c, m + c)] += l;
-                j[(m + c, m + c)] += l;
-                g[m + c] += l * d[c];
+            for k in 0..3 {
+                g[m + k] += l * d[k];
             }
         }
         scale_clock_columns(&mut j, m, c);
@@ -404,24 +404,24 @@ impl SharedFit<'_> {
 
     /// Each window's Jacobian of its estimating equations at (`theta`, `d`, `scale`), `terms`
     /// there, and their sum with the lever's prior (weight `l`). The clock columns are measured:
-    /// the equations' change over θ_i ± δ_i (δ_i moving Δt by half the instrument's half-step at
-    /// most, `Self::probe_steps`); the lever's are the analytic ones (no time derivative in them).
-    /// When a shift gains or loses a window, the analytic clock columns scaled by the iteration's
-    /// secant correction `c` instead.
+    /// the window's equations' change over θ_i ± δ (δ moving Δt by half the instrument's half-step
+    /// at most within the window, [`Self::probe_step`]); one-sided where a shift changes the
+    /// window's points on one side only, and the analytic column scaled by the iteration's secant
+    /// correction `c` where it changes them on both. The lever's columns are the analytic ones
+    /// (no time derivative in them).
     ///
-    /// Why measured, for the error bar only (the iteration, and whether it converged, keep the
-    /// analytic J, which steers it well): J's clock columns are a derivative over a wider stencil
-    /// than the instrument's, and
-    /// the secant correction that makes up for it only grows. Where the estimate's stamps jitter
-    /// (taken at receipt: a 200 Hz estimate whose stamps wander by more than its period) the steps
-    /// undo each other from noise and c climbed to 2–4 where the equations' slope was 1.2–1.4
-    /// times J, and σ came out short by that factor (receipt-stamp missions whose Δt scattered by
-    /// 4 ms over fresh noise reported 1–2 ms). Below 40 Hz J misses a gait the instrument follows:
-    /// J − J_k went near-singular in the jackknife, and a formal floor on J was tens of
-    /// milliseconds on legged missions whose Δt was within 1 ms. The measured slope has neither
-    /// fault at any rate; and where one constant is fitted across a clock step, it says how little
-    /// the equations pin it (σ of seconds where J claimed 45 ms). docs/evidence.md, "The slope,
-    /// measured".
+    /// Why measured (for the error bar, and the scale handed to the profile's windows; the
+    /// iteration, and whether it converged, keep the analytic J, which steers it well): J's clock
+    /// columns are a derivative over a wider stencil than the instrument's, and the secant
+    /// correction that makes up for it only grows. Where the estimate's stamps jitter (taken at
+    /// receipt: a 200 Hz estimate whose stamps wander by more than its period) the steps undo each
+    /// other from noise and c climbed to 2–4 where the equations' slope was 1.2–1.4 times J, and
+    /// σ came out short by that factor (receipt-stamp missions whose Δt scattered by 4 ms over
+    /// fresh noise reported 1–2 ms). Below 40 Hz J misses a gait the instrument follows: J − J_k
+    /// went near-singular in the jackknife, and a formal floor on J was tens of milliseconds on
+    /// legged missions whose Δt was within 1 ms. The measured slope has neither fault at any rate;
+    /// and where one constant is fitted across a clock step, it says how little the equations pin
+    /// it (σ of seconds where J claimed 45 ms). docs/evidence.md, "The slope, measured".
     pub(super) fn jacobians(
         &self,
         (theta, d, scale): (&[f64], &Vector3<f64>, f64),
@@ -430,91 +430,82 @@ impl SharedFit<'_> {
         c: f64,
     ) -> Jacobians {
         let m = self.m;
-        let measured = || -> Option<Vec<Option<DMatrix<f64>>>> {
-            let mut own: Vec<Option<DMatrix<f64>>> = terms
-                .iter()
-                .map(|t| t.as_ref().map(|t| t.j.clone()))
-                .collect();
-            for (i, step) in self.probe_steps().into_iter().enumerate() {
-                let at = |sign: f64| {
-                    let mut shifted = theta.to_vec();
-                    shifted[i] += sign * step;
-                    self.eval(&shifted, d, scale)
-                };
-                let (plus, minus) = (at(1.0), at(-1.0));
-                for ((j, a), b) in own.iter_mut().zip(&plus).zip(&minus) {
-                    match (j, a, b) {
-                        (Some(j), Some(a), Some(b)) => {
-                            j.set_column(i, &((&a.g - &b.g) / (2.0 * step)));
-                        }
-                        (None, None, None) => {}
-                        _ => return None,
-                    }
+        let own: Vec<Option<DMatrix<f64>>> = self
+            .windows
+            .par_iter()
+            .zip(terms)
+            .map(|(w, t)| {
+                let t = t.as_ref()?;
+                let mut j = t.j.clone();
+                for i in 0..m {
+                    let Some(step) = self.probe_step(w, i) else {
+                        continue; // Δt in this window does not depend on θ_i.
+                    };
+                    let at = |sign: f64| {
+                        let mut shifted = theta.to_vec();
+                        shifted[i] += sign * step;
+                        self.problem
+                            .terms(w, self.shape, &shifted, d, self.with_lever, scale)
+                            // The same points, or the difference is a point's whole term.
+                            .filter(|s| s.n == t.n && s.segments == t.segments)
+                    };
+                    let column = match (at(1.0), at(-1.0)) {
+                        (Some(a), Some(b)) => (&a.g - &b.g) / (2.0 * step),
+                        (Some(a), None) => (&a.g - &t.g) / step,
+                        (None, Some(b)) => (&t.g - &b.g) / step,
+                        (None, None) => j.column(i) * c,
+                    };
+                    j.set_column(i, &column);
                 }
-            }
-            Some(own)
-        };
-        let own = measured().unwrap_or_else(|| {
-            terms
-                .iter()
-                .map(|t| {
-                    t.as_ref().map(|t| {
-                        let mut j = t.j.clone();
-                        scale_clock_columns(&mut j, m, c);
-                        j
-                    })
-                })
-                .collect()
-        });
+                Some(j)
+            })
+            .collect();
         let mut whole = own
             .iter()
             .flatten()
             .fold(DMatrix::zeros(self.p, self.p), |a, j| a + j);
-        if self.with_lever {
-            for k in m..self.p {
-                whole[(k, k)] += l;
-            }
-        }
+        self.add_lever_prior(&mut whole, l);
         Jacobians { own, whole }
     }
 
-    /// The shift of each clock parameter that moves Δt by half the instrument's half-step at most
-    /// over the windows (a linear drift's slope by that over the farthest window's distance from
-    /// the mid). Half the instrument's half-step (25 ms at 20 Hz and above, half a period below):
-    /// over less than an estimate's period the equations are rough — the instrument's change with
-    /// Δt is the interpolated track's local slope, mostly the estimate's noise at 100–200 Hz, and
-    /// against the reference's noise in the residual it flattened the slope measured over ±2 ms to
-    /// a quarter of its value over ±10 ms or more (σ 0.35 s on a turn in place whose Δt was within
-    /// 0.1 ms); a gait at 2–3.5 Hz keeps 90 % of its slope over ±25 ms.
-    fn probe_steps(&self) -> Vec<f64> {
-        let probe_s = 0.5 * self.problem.half_step_s();
-        let mut reach = vec![0.0f64; self.m];
+    /// The shift of clock parameter `i` that moves Δt by half the instrument's half-step at most
+    /// within window `w` (a linear drift's slope by that over the window's farthest end from the
+    /// mid); `None` when Δt in the window does not depend on θ_i (another segment's offset).
+    /// Half the instrument's half-step (25 ms at 20 Hz and above, 50 ms at 10 Hz, 125 ms below
+    /// 4 Hz): over less than an estimate's period the equations are rough — the instrument's
+    /// change with Δt is the interpolated track's local slope, mostly the estimate's noise at
+    /// 100–200 Hz, and against the reference's noise in the residual it flattened the slope
+    /// measured over ±2 ms to a quarter of its value over ±10 ms or more (σ 0.35 s on a turn in
+    /// place whose Δt was within 0.1 ms, in a trial); a gait at 2–3.5 Hz keeps 90 % of its slope
+    /// over ±25 ms.
+    fn probe_step(&self, w: &Window, i: usize) -> Option<f64> {
         let mut phi = vec![0.0; self.m];
-        for w in self.windows {
-            for t in [w.t_start, w.t_end] {
-                self.shape.basis(t, &mut phi);
-                for (r, v) in reach.iter_mut().zip(&phi) {
-                    *r = r.max(v.abs());
-                }
-            }
+        let mut reach = 0.0f64;
+        for t in [w.t_start, w.t_end] {
+            self.shape.basis(t, &mut phi);
+            reach = reach.max(phi[i].abs());
         }
-        reach
-            .into_iter()
-            .map(|r| if r > 0.0 { probe_s / r } else { probe_s })
-            .collect()
+        (reach > 0.0).then(|| 0.5 * self.problem.half_step_s() / reach)
     }
 
-    /// The formal covariance S⁻¹·σ̂²H·S⁻ᵀ of the summed equations (S the measured Jacobian
-    /// `jac`, H = Σ v·v with the lever's prior `l`), σ̂² the residual per degree of freedom (white
+    /// The lever's prior (weight `l`, on the lever's diagonal) added to a summed Jacobian or H.
+    fn add_lever_prior(&self, a: &mut DMatrix<f64>, l: f64) {
+        if self.with_lever {
+            for k in self.m..self.p {
+                a[(k, k)] += l;
+            }
+        }
+    }
+
+    /// The formal covariance S⁻¹·σ̂²H·S⁻ᵀ of the summed equations (S the Jacobian `jac`, H the
+    /// summed Σ v·v with the lever's prior), σ̂² the residual per degree of freedom (white
     /// residuals assumed).
     pub(super) fn formal_covariance(
         &self,
         terms: &[Option<Terms>],
         jac: &Jacobians,
-        d: &Vector3<f64>,
-        l: f64,
+        h: &DMatrix<f64>,
     ) -> Option<DMatrix<f64>> {
-        let (h, _, _) = self.summed(terms, d, l, 1.0);
         let (rss, _) = residual_sums(terms);
         let dof = terms.iter().flatten().map(Terms::dof).sum::<f64>() - self.p as f64;
         if dof <= 0.0 {
@@ -525,8 +516,8 @@ impl SharedFit<'_> {
     }
 
     /// The delete-one-window jackknife at the solution (see the module doc): each window left out
-    /// by one step (S − S_k)⁻¹·g_k of the summed equations less its own, S the measured Jacobian
-    /// ([`Self::jacobians`]); the covariance (K−1)/K·Σ(δ₋ₖ − δ̄)(δ₋ₖ − δ̄)ᵀ of those steps.
+    /// by one step (S − S_k)⁻¹·g_k of the summed equations less its own, S the Jacobian of
+    /// [`Self::jacobians`]; the covariance (K−1)/K·Σ(δ₋ₖ − δ̄)(δ₋ₖ − δ̄)ᵀ of those steps.
     /// `None` when fewer than three windows could be left out.
     fn jackknife(&self, terms: &[Option<Terms>], jac: &Jacobians) -> Option<DMatrix<f64>> {
         let p = self.p;
@@ -552,22 +543,18 @@ impl SharedFit<'_> {
         Some(cov)
     }
 
-    /// The scale of the clock columns for the profile's windows: the measured Jacobian's over the
-    /// analytic one's along a shift of the whole clock, within [`PROFILE_SCALE_RANGE`]; the
-    /// iteration's `c` when they disagree in sign.
-    fn profile_scale(&self, jac: &Jacobians, terms: &[Option<Terms>], c: f64) -> f64 {
+    /// The scale of the clock columns for the profile's windows: the Jacobian of
+    /// [`Self::jacobians`] over the analytic one (`analytic`, summed) along a shift of the whole
+    /// clock, within [`PROFILE_SCALE_RANGE`]; the iteration's `c` unless both are positive.
+    fn profile_scale(&self, jac: &Jacobians, analytic: &DMatrix<f64>, c: f64) -> f64 {
         let m = self.m;
-        let analytic = terms
-            .iter()
-            .flatten()
-            .fold(DMatrix::<f64>::zeros(self.p, self.p), |a, t| a + &t.j);
         let u = self.shape.uniform_shift();
         let along = |a: &DMatrix<f64>| -> f64 {
             (0..m)
                 .map(|r| u[r] * (0..m).map(|k| a[(r, k)] * u[k]).sum::<f64>())
                 .sum()
         };
-        let (num, den) = (along(&jac.whole), along(&analytic));
+        let (num, den) = (along(&jac.whole), along(analytic));
         if num > 0.0 && den > 0.0 {
             (num / den).clamp(PROFILE_SCALE_RANGE.0, PROFILE_SCALE_RANGE.1)
         } else {
@@ -585,7 +572,7 @@ impl SharedFit<'_> {
         let jac = self.jacobians((&x.theta, &d, x.scale), &x.terms, l, x.jacobian_scale);
         // The Newton step left, as the iteration steps (its Jacobian, not the error bar's).
         let remaining = self.normal(&x.terms, &d, l, x.jacobian_scale, 0.0).0;
-        let (h, _, _) = self.summed(&x.terms, &d, l, 1.0);
+        let (h, analytic, _) = self.summed(&x.terms, &d, l, 1.0);
         let used: Vec<(&Window, &Terms)> = self
             .windows
             .iter()
@@ -595,7 +582,7 @@ impl SharedFit<'_> {
         let mut cov = self.jackknife(&x.terms, &jac)?;
         // The formal σ is the floor (see the module doc): each parameter's variance raised to it,
         // the jackknife's correlations kept.
-        if let Some(formal) = self.formal_covariance(&x.terms, &jac, &d, l) {
+        if let Some(formal) = self.formal_covariance(&x.terms, &jac, &h) {
             let raise: Vec<f64> = (0..p)
                 .map(|k| {
                     let (jack, floor) = (cov[(k, k)], formal[(k, k)]);
@@ -623,6 +610,10 @@ impl SharedFit<'_> {
         // while a jump of the estimate could bend a fit; with jumps given their own frames, one σ
         // took a 1 Hz-reference mission's σ from 447 to 7 ms and located a step 0.01 s off instead of
         // 43 s (docs/evidence.md).
+        // The step is the iteration's (its Jacobian), σ the error bar's: a constant fitted across
+        // a clock step, which the equations barely pin (σ of seconds), counts as converged, so that
+        // the profile starts from its lever (judged on the measured slope it did not, and the
+        // profile lost the step).
         let converged = remaining.is_some_and(|step| {
             (0..m).all(|k| step[k].abs() <= sig(k).max(1e-4))
                 && (!with_lever || (m..p).all(|k| step[k].abs() <= sig(k).max(1e-3)))
@@ -647,7 +638,7 @@ impl SharedFit<'_> {
             outliers: Vec::new(),
             rms_m: used.iter().map(|(_, t)| t.rms_m()).collect(),
             scale: x.scale,
-            jacobian_scale: self.profile_scale(&jac, &x.terms, x.jacobian_scale),
+            jacobian_scale: self.profile_scale(&jac, &analytic, x.jacobian_scale),
             iterations,
             converged: converged && used.len() >= 3,
         })

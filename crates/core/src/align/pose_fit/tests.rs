@@ -60,6 +60,24 @@ impl Sim {
         }
     }
 
+    /// The estimate stamped at receipt: each stamp late by a draw of `latency`, the samples
+    /// re-ordered by stamp.
+    fn stamped_at_receipt(
+        mut self,
+        rng: &mut rand_chacha::ChaCha8Rng,
+        latency: &impl rand_distr::Distribution<f64>,
+    ) -> Sim {
+        let mut samples: Vec<(f64, Vector3<f64>, UnitQuaternion<f64>)> = (0..self.t.len())
+            .map(|i| (self.t[i] + latency.sample(rng), self.p[i], self.q[i]))
+            .collect();
+        samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+        self.t = samples.iter().map(|s| s.0).collect();
+        self.p = samples.iter().map(|s| s.1).collect();
+        self.q = samples.iter().map(|s| s.2).collect();
+        self.jumps = crate::align::jumps::jumps(&self.t, &self.p, 1.0);
+        self
+    }
+
     /// The estimate moved by `by` from `at_s` on (its clock): a localiser correcting itself.
     fn jumped(mut self, at_s: f64, by: Vector3<f64>) -> Sim {
         for (t, p) in self.t.iter().zip(&mut self.p) {
@@ -172,10 +190,9 @@ fn the_sigma_of_the_offset_is_the_spread_of_its_answers() {
         };
         let terms = shared.eval(&f.theta, &f.lever_m, f.scale);
         let l = lever_weight(&terms);
-        let jac = shared.jacobians((&f.theta, &f.lever_m, f.scale), &terms, l, 1.0);
-        let formal = shared
-            .formal_covariance(&terms, &jac, &f.lever_m, l)
-            .unwrap();
+        let jac = shared.jacobians((&f.theta, &f.lever_m, f.scale), &terms, l, f.jacobian_scale);
+        let (h, _, _) = shared.summed(&terms, &f.lever_m, l, 1.0);
+        let formal = shared.formal_covariance(&terms, &jac, &h).unwrap();
         assert!(f.theta_sigma[0] >= 0.999 * formal[(0, 0)].sqrt());
         errors2 += (f.theta[0] - dt_true).powi(2);
         sigmas2 += f.theta_sigma[0].powi(2);
@@ -195,11 +212,12 @@ fn the_sigma_of_the_offset_is_the_spread_of_its_answers() {
     );
 }
 
-/// The estimate stamped at receipt (each stamp late by an exponential latency of 15 ms mean,
-/// re-ordered by stamp), the reference noisy, drawn again and again: the σ the fit reports covers
-/// the spread of its answers. The error bar's Jacobian is measured on the equations; taken from
-/// the iteration's secant correction, which such noise drives up, σ was short (RMS error over RMS
-/// σ 1.63 over these draws; 0.84 measured).
+/// The estimate (20 Hz) stamped at receipt (each stamp late by an exponential latency of 15 ms
+/// mean, re-ordered by stamp), the reference noisy, drawn again and again: the σ the fit reports
+/// covers the spread of its answers and is not far wider. The error bar's Jacobian is measured on
+/// the equations; with H = Σ v·v in the jackknife and the secant-scaled Jacobian in its floor (the
+/// rule for this rate before), σ was short: RMS error over RMS σ 1.63 over these draws, 0.84
+/// measured.
 #[test]
 fn the_sigma_covers_the_spread_when_the_estimate_is_stamped_at_receipt() {
     use rand::SeedableRng;
@@ -216,14 +234,7 @@ fn the_sigma_covers_the_spread_when_the_estimate_is_stamped_at_receipt() {
         for p in &mut sim.ref_p {
             *p += Vector3::from_fn(|_, _| noise.sample(&mut rng));
         }
-        let mut samples: Vec<(f64, Vector3<f64>, UnitQuaternion<f64>)> = (0..sim.t.len())
-            .map(|i| (sim.t[i] + latency.sample(&mut rng), sim.p[i], sim.q[i]))
-            .collect();
-        samples.sort_by(|a, b| a.0.total_cmp(&b.0));
-        sim.t = samples.iter().map(|s| s.0).collect();
-        sim.p = samples.iter().map(|s| s.1).collect();
-        sim.q = samples.iter().map(|s| s.2).collect();
-        sim.jumps = crate::align::jumps::jumps(&sim.t, &sim.p, 1.0);
+        let sim = sim.stamped_at_receipt(&mut rng, &latency);
         let data = sim.data();
         let w = data.windows();
         let f = constant_from(&data, &w, 0.1);
@@ -232,7 +243,7 @@ fn the_sigma_covers_the_spread_when_the_estimate_is_stamped_at_receipt() {
         sigmas2 += f.theta_sigma[0].powi(2);
     }
     let ratio = (errors2 / sigmas2).sqrt();
-    assert!(ratio < 1.1, "RMS error / RMS σ {ratio}");
+    assert!((0.5..1.1).contains(&ratio), "RMS error / RMS σ {ratio}");
 }
 
 /// At a constant walking speed a clock step leaves the speed signals nothing to locate it by;
