@@ -193,24 +193,36 @@ impl Prefix {
             &mut self.dd,
         ] {
             v.clear();
+            v.resize(n + 1, 0.0);
         }
-        let (mut m0, mut m1, mut m2, mut d0, mut d1, mut dd) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-        for q in 0..=n {
-            self.m0.push(m0);
-            self.m1.push(m1);
-            self.m2.push(m2);
-            self.d0.push(d0);
-            self.d1.push(d1);
-            self.dd.push(dd);
-            if q < n {
-                let (m, d, x) = (mask[q], values[q], q as f64);
-                m0 += m;
-                m1 += x * m;
-                m2 += x * x * m;
-                d0 += d;
-                d1 += x * d;
-                dd += d * d;
-            }
+        // Written by index into buffers of the final length (no push, no branch per point); every
+        // slice n long, so that the bounds checks fold away.
+        let (mask, values) = (&mask[..n], &values[..n]);
+        let (m0, m1, m2) = (
+            &mut self.m0[1..=n],
+            &mut self.m1[1..=n],
+            &mut self.m2[1..=n],
+        );
+        let (d0, d1, dd) = (
+            &mut self.d0[1..=n],
+            &mut self.d1[1..=n],
+            &mut self.dd[1..=n],
+        );
+        let (mut a0, mut a1, mut a2, mut b0, mut b1, mut bb) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        for q in 0..n {
+            let (m, d, x) = (mask[q], values[q], q as f64);
+            a0 += m;
+            a1 += x * m;
+            a2 += x * x * m;
+            b0 += d;
+            b1 += x * d;
+            bb += d * d;
+            m0[q] = a0;
+            m1[q] = a1;
+            m2[q] = a2;
+            d0[q] = b0;
+            d1[q] = b1;
+            dd[q] = bb;
         }
     }
 
