@@ -124,7 +124,7 @@ pub struct Clock {
     #[serde(default)]
     pub t_mid: Option<f64>,
     /// The least drift the windows tell from a constant clock, ppm: a `constant` clock may hide a
-    /// drift below it (its σ covers the part of the measured drift beyond its own noise).
+    /// drift below it (its σ adds a drift measured beyond 2σ but below the resolution).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub drift_resolution_ppm: Option<f64>,
     /// Constant: one segment over the overlap; piecewise: each segment; linear: none.

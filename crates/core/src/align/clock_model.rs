@@ -115,8 +115,8 @@ pub struct ClockModel {
     pub drift_sigma_ppm: Option<f64>,
     /// The smallest drift declared on this profile, ppm: [`SLOW_ERROR_FACTOR`]·z·σ_drift with
     /// z = √(BIC margin + ln n) (what a linear model must gain to be chosen). Below it the model is
-    /// constant whatever the BIC says (the pose fit's constant then has a σ that covers the drift it
-    /// may hide: `align::pose_model`).
+    /// constant whatever the BIC says (the pose fit's constant then adds to its σ a drift measured
+    /// beyond 2σ_drift: `align::pose_model`).
     pub drift_resolution_ppm: Option<f64>,
     /// The segments (piecewise; empty otherwise).
     pub segments: Vec<ClockSegment>,
