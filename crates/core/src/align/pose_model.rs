@@ -665,6 +665,31 @@ mod tests {
     }
 
     #[test]
+    fn a_drift_below_the_resolution_widens_the_constant_only_beyond_twice_its_sigma() {
+        // Four windows at 10–70 s: their times spread by √500 s about their mean (equal σ).
+        let p = profile(|_| 0.1);
+        let spread_s = 500f64.sqrt();
+        let constant = |d: f64| ClockModel {
+            drift_ppm: Some(d),
+            drift_sigma_ppm: Some(10.0),
+            ..ClockModel::constant(0.0, 0.0, String::new())
+        };
+        let fitted = fit(ClockShape::Constant, vec![0.1], vec![0.005]);
+        // 15 ppm measured with σ 10 ppm: what a constant clock shows by chance; σ stays the fit's.
+        let mut m = constant(15.0);
+        set_parameters(&mut m, &fitted, &p);
+        assert!(close(m.sigma_s, 0.005), "{m:?}");
+        // 30 ppm, 3σ: the part beyond its noise, √(30² − 10²) ppm, over the windows' spread.
+        let mut m = constant(-30.0);
+        set_parameters(&mut m, &fitted, &p);
+        let hidden_s = 800f64.sqrt() * 1e-6 * spread_s;
+        assert!(
+            close(m.sigma_s, (0.005f64.powi(2) + hidden_s * hidden_s).sqrt()),
+            "{m:?}"
+        );
+    }
+
+    #[test]
     fn a_line_keeps_the_drifts_floor_and_states_it_in_ppm() {
         let p = profile(|t| 0.1 - 50e-6 * (t - 40.0));
         let mut m = ClockModel {
