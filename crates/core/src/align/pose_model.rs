@@ -24,8 +24,8 @@
 //! A constant clock whose drift the data cannot resolve could still hide one below the resolution:
 //! when the profile's line measures a drift d beyond [`HIDDEN_DRIFT_Z`] of its σ_d (a drift the data
 //! suggest without resolving it), the constant's σ adds the part of it beyond its noise,
-//! √(d² − σ_d²)·(the windows' spread in time: the RMS distance of the windows' times from their
-//! mean), what such a drift moves Δt by over the mission in the RMS. Below 2σ_d the measured drift
+//! √(d² − σ_d²)·(the windows' spread in time: the σ-weighted RMS distance of their times from
+//! their mean), what such a drift moves Δt by over the mission in the RMS. Below 2σ_d the measured drift
 //! is what a constant clock's windows show by chance (a third of them beyond 1σ_d): added from 1σ_d
 //! on, it raised σ on 6 and 8 of 12 fresh draws of a ground and a legged mission on constant clocks,
 //! by up to 2.5 times (docs/evidence.md, "The hidden drift, from 2σ").
@@ -398,7 +398,7 @@ fn set_parameters(model: &mut ClockModel, last: &PoseFit, profile: &OffsetProfil
             // A drift below the resolution that the constant could hide (see the module doc).
             let hidden = match (model.drift_ppm, model.drift_sigma_ppm) {
                 (Some(d), Some(s)) if d.abs() > HIDDEN_DRIFT_Z * s => {
-                    let excess = ((d * d - s * s).max(0.0)).sqrt() * 1e-6;
+                    let excess = (d * d - s * s).sqrt() * 1e-6;
                     excess * time_spread(profile)
                 }
                 _ => 0.0,
