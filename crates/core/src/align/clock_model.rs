@@ -237,8 +237,14 @@ struct Fit {
 /// assert!(close(windows_offset_sigma_s(&profile, all), 0.002 * (2.0 / 7.0f64).sqrt()));
 /// ```
 pub fn windows_offset_sigma_s(profile: &OffsetProfile, span: (f64, f64)) -> Option<f64> {
+    windows_offset_s(profile, span).map(|(_, sigma)| sigma)
+}
+
+/// The weighted mean of `profile`'s usable windows wholly inside `span` (reference seconds) and its
+/// σ ([`windows_offset_sigma_s`]); `None` without such a window.
+pub fn windows_offset_s(profile: &OffsetProfile, span: (f64, f64)) -> Option<(f64, f64)> {
     let w = inside(&profile.usable(), span, 0.5 * profile.window_s);
-    fit(&w, 0.0, false, profile.redundancy()).map(|c| c.sigma_a * c.birge(w.len(), 1))
+    fit(&w, 0.0, false, profile.redundancy()).map(|c| (c.a, c.sigma_a * c.birge(w.len(), 1)))
 }
 
 /// The σ at `t_mid` of the line through `profile`'s usable windows (as

@@ -33,8 +33,8 @@
 use nalgebra::Vector3;
 
 use crate::align::clock_model::{
-    choose_model, locate_change, windows_line_sigma_s, windows_offset_sigma_s, ClockModel,
-    ClockSegment, OffsetModel, Steps,
+    choose_model, locate_change, windows_line_sigma_s, windows_offset_s, windows_offset_sigma_s,
+    ClockModel, ClockSegment, OffsetModel, Steps,
 };
 use crate::align::offset_profile::{OffsetProfile, ProfileParams, ProfileWindow};
 use crate::align::pose_fit::{self, ClockShape, PoseData, PoseFit, WindowSearch};
@@ -343,9 +343,12 @@ impl Mission<'_, '_> {
         // walk is half a second) with a σ that cannot show it. The signal searches' answer stands.
         self.whole.as_ref()?;
         if model.model == OffsetModel::Constant {
-            let (mean, sigma) = weighted_mean(&profile);
-            model.offset_s = mean;
-            model.sigma_s = sigma;
+            if let Some((mean, sigma)) =
+                windows_offset_s(&profile, (f64::NEG_INFINITY, f64::INFINITY))
+            {
+                model.offset_s = mean;
+                model.sigma_s = sigma;
+            }
         }
         model.describe();
         Some(PoseClock {
@@ -539,25 +542,6 @@ fn consistent_windows(raw: Vec<pose_fit::WindowOffset>) -> Vec<pose_fit::WindowO
         .filter(|(_, d)| *d <= NEIGHBOUR_OUTLIER * typical)
         .map(|(w, _)| w)
         .collect()
-}
-
-/// The weighted mean of the usable windows' offsets and its σ, raised by their scatter about it
-/// where that exceeds their σ.
-fn weighted_mean(p: &OffsetProfile) -> (f64, f64) {
-    let w = p.usable();
-    let (mut s, mut sy) = (0.0, 0.0);
-    for x in &w {
-        let q = 1.0 / (x.sigma_s * x.sigma_s);
-        s += q;
-        sy += q * x.offset_s;
-    }
-    let mean = sy / s;
-    let chi2: f64 = w
-        .iter()
-        .map(|x| ((x.offset_s - mean) / x.sigma_s).powi(2))
-        .sum();
-    let birge = (chi2 / (w.len() as f64 - 1.0).max(1.0)).sqrt().max(1.0);
-    (mean, birge / s.sqrt())
 }
 
 /// The weighted standard deviation of the usable windows' times, seconds.
