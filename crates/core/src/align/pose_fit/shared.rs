@@ -570,9 +570,12 @@ impl SharedFit<'_> {
         let d = x.lever_m;
         let l = lever_weight(&x.terms);
         let jac = self.jacobians((&x.theta, &d, x.scale), &x.terms, l, x.jacobian_scale);
-        // The Newton step left, as the iteration steps (its Jacobian, not the error bar's).
-        let remaining = self.normal(&x.terms, &d, l, x.jacobian_scale, 0.0).0;
-        let (h, analytic, _) = self.summed(&x.terms, &d, l, 1.0);
+        // The summed equations once: H and the analytic J for the error bar, and the Newton step
+        // left as the iteration steps (J's clock columns scaled by c, not the error bar's slope).
+        let (h, analytic, g) = self.summed(&x.terms, &d, l, 1.0);
+        let mut j_c = analytic.clone();
+        scale_clock_columns(&mut j_c, m, x.jacobian_scale);
+        let remaining = j_c.lu().solve(&g).map(|step| -step);
         let used: Vec<(&Window, &Terms)> = self
             .windows
             .iter()
