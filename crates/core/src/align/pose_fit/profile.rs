@@ -322,7 +322,8 @@ impl WindowScatter {
 /// does a system that cannot tell the two apart (every v_k in proportion to c_k: windows equally
 /// sharp). f = [`scatter_factor`] (at least 1) and τ = 0 with fewer than three terms or an answer
 /// that is not finite. With few windows τ comes out low more often than high (the validation's
-/// missions hold 6–30); the windows' floor and the jackknife of the final fit stand behind it.
+/// missions hold 6–30); the final fit's jackknife, pooled with the windows, and its formal σ stand
+/// behind it.
 ///
 /// Windows whose errors are all the same size, whatever their own σ:
 /// ```
