@@ -705,6 +705,7 @@ fn pose_over_time(
         fitted_lever_m: Some([lever.x, lever.y, lever.z]),
         fitted_lever_sigma_m: lever_sigma.map(|s| [s.x, s.y, s.z]),
         fitted_forward_separable: pc.fit.as_ref().map(|f| !f.inseparable()),
+        sigma_parts: pc.sigma_parts,
         ..model_report(model, &pc.profile, t0_s)
     };
     Some((report, warnings, pose_note(&pc), pose_entry(&pc)))

@@ -13,6 +13,7 @@ pub mod like;
 use rayon::prelude::*;
 
 use crate::align::clock_model::OffsetModel;
+use crate::align::pose_model::SigmaParts;
 use crate::diag::WarningCode;
 use crate::error::Result;
 use crate::eval::config::{EvalConfig, NamedInput};
@@ -104,6 +105,9 @@ pub struct MissionGrade {
     /// middle of the overlap; linear: at `t_mid`; piecewise: the longest segment's), seconds.
     pub error_s: Option<f64>,
     pub sigma_s: Option<f64>,
+    /// What σ was made of (the report's `time_offset.sigma_parts`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sigma_parts: Option<SigmaParts>,
     /// The truth's largest distance from the headline Δt over the mission (a drift the constant hides).
     pub spread_s: f64,
     pub windows: Vec<WindowGrade>,
@@ -178,6 +182,7 @@ pub fn grade(truth: &dyn ClockTruth, report: &Report, t0_s: f64) -> MissionGrade
         model: o.model,
         error_s,
         sigma_s: o.sigma_s,
+        sigma_parts: o.sigma_parts,
         spread_s,
         windows,
         clock_alarm: codes.iter().any(|w| {
@@ -287,6 +292,7 @@ pub fn run_scenario(s: &Scenario) -> MissionGrade {
             model: None,
             error_s: None,
             sigma_s: None,
+            sigma_parts: None,
             spread_s: 0.0,
             windows: Vec::new(),
             clock_alarm: false,

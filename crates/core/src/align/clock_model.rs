@@ -240,6 +240,12 @@ pub fn windows_offset_sigma_s(profile: &OffsetProfile, span: (f64, f64)) -> Opti
     windows_offset_s(profile, span).map(|(_, sigma)| sigma)
 }
 
+/// How many of `profile`'s usable windows lie wholly inside `span` (reference seconds): those
+/// [`windows_offset_s`] combines.
+pub fn windows_inside(profile: &OffsetProfile, span: (f64, f64)) -> usize {
+    inside(&profile.usable(), span, 0.5 * profile.window_s).len()
+}
+
 /// The weighted mean of `profile`'s usable windows wholly inside `span` (reference seconds) and its
 /// σ ([`windows_offset_sigma_s`]); `None` without such a window.
 pub fn windows_offset_s(profile: &OffsetProfile, span: (f64, f64)) -> Option<(f64, f64)> {

@@ -18,14 +18,16 @@
 //!    [`crate::align::pose_fit`]), and the profile's windows for the same parameter (their
 //!    calibrated σ combined and raised by their scatter about it, D held; the signal searches' 2 ms
 //!    floor is not theirs). An offset's σ (the constant's, each segment's) is the mean of the two
-//!    variances, at least the formal σ: each alone is an estimate from 8–30 windows, noisy from
+//!    variances, at least the formal σ (over at least [`MIN_POOLED_WINDOWS`] windows and where the
+//!    jackknife saw a spread; otherwise the larger): each alone is an estimate from 8–30 windows, noisy from
 //!    mission to mission, and the larger of two noisy estimates is biased wide (taking it, the
 //!    constant clocks' median |error|/σ was 0.595 against a Gaussian's 0.674 and 2σ covered 96 %;
 //!    pooled, 0.674 and 95 %, and scaled to the same median fewer errors beyond 2.5σ: 30 of 1399
 //!    against 36; docs/evidence.md, "Two estimates of σ, pooled"). The line's σ (offset at t_mid
 //!    and drift) stay the fit's, at least the windows': there the windows' line is the narrower
 //!    (alone its median |error|/σ is 1.02), and pooling would take the declared drifts' 2σ coverage
-//!    from 95 % to 93 %.
+//!    from 95 % to 93 %. The report's `time_offset.sigma_parts` gives the pieces and the rule
+//!    ([`SigmaParts`]).
 //!
 //! A constant clock whose drift the data cannot resolve could still hide one below the resolution:
 //! when the profile's line measures a drift d beyond [`HIDDEN_DRIFT_Z`] of its σ_d (a drift the data
@@ -37,10 +39,11 @@
 //! by up to 2.5 times (docs/evidence.md, "The hidden drift, from 2σ").
 
 use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
 
 use crate::align::clock_model::{
-    choose_model, locate_change, windows_line_sigma_s, windows_offset_s, windows_offset_sigma_s,
-    ClockModel, ClockSegment, OffsetModel, Steps,
+    choose_model, locate_change, windows_inside, windows_line_sigma_s, windows_offset_s,
+    windows_offset_sigma_s, ClockModel, ClockSegment, OffsetModel, Steps,
 };
 use crate::align::offset_profile::{OffsetProfile, ProfileParams, ProfileWindow};
 use crate::align::pose_fit::{self, ClockShape, PoseData, PoseFit, WindowSearch};
@@ -59,12 +62,42 @@ pub const COARSE_STEP_S: f64 = 0.025;
 /// Each window of the profile searches this far around its start when its own refinement fails (a
 /// clock step), or for a deeper root (see `Mission::window_search`), seconds.
 pub const WINDOW_SEARCH_S: f64 = 3.0;
+/// An offset's σ pools the jackknife with the windows only over at least this many windows (the
+/// jackknife's own least); over fewer, and where the jackknife saw no spread at all, it is the
+/// larger of the two.
+pub const MIN_POOLED_WINDOWS: usize = 3;
 /// A drift below the resolution enters the constant's σ only when the profile's line measures it
 /// beyond this many of its σ (see the module doc).
 pub const HIDDEN_DRIFT_Z: f64 = 2.0;
 /// Every profile window is searched for a deeper root unless the whole mission's constant has a σ
 /// within this, seconds (see `Mission::window_search`).
 pub const DEEP_SEARCH_SIGMA_S: f64 = 0.002;
+
+/// How the headline σ combined the jackknife with the windows (see the module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SigmaCombination {
+    /// An offset (constant, a segment): the mean of the two variances, at least the formal σ.
+    Pooled,
+    /// The line: the larger of the fit's σ (the jackknife, at least the formal) and the windows'.
+    Larger,
+}
+
+/// What the headline σ was made of, seconds: the report's `sigma_parts`, so that a user (and the
+/// validation) can see which piece carries it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SigmaParts {
+    /// The final fit's jackknife over windows, the lever free.
+    pub jackknife_s: f64,
+    /// The final fit's formal σ (what white residuals would give; 0 when it could not be formed).
+    pub formal_s: f64,
+    /// The profile's windows for the same parameter, the lever held (their calibrated σ combined
+    /// and raised by their scatter about it); `None` without a window inside its span.
+    pub windows_s: Option<f64>,
+    /// A drift below the resolution the constant could hide, added in quadrature (0 otherwise).
+    pub hidden_drift_s: f64,
+    pub combined: SigmaCombination,
+}
 
 /// The clock model found by the pose fit.
 #[derive(Debug, Clone)]
@@ -76,10 +109,13 @@ pub struct PoseClock {
     pub fit: Option<PoseFit>,
     /// The lever used and its σ (estimate body frame, metres).
     pub lever: (Vector3<f64>, Option<Vector3<f64>>),
-    /// The whole-mission constant fit's Δt and σ (what step 1 found).
+    /// The final fit's first clock parameter (the constant; the line's offset at t_mid; the first
+    /// segment's offset) and its σ as the model reports it.
     pub whole: (f64, f64),
     /// Windows left out of the whole-mission fit (their residual far above the others').
     pub outlier_windows: usize,
+    /// What the headline σ was made of; `None` when the model's parameters are the windows'.
+    pub sigma_parts: Option<SigmaParts>,
 }
 
 /// The speed signals of the pair (reference, estimate), asked for only when a step's time is not
@@ -123,13 +159,19 @@ pub fn pose_clock_model(
     };
     let (profile, mut model) = (chosen.profile, chosen.model);
     let last = mission.drift_resolved(&mut model, last);
-    set_parameters(&mut model, &last, &profile);
+    let sigma_parts = set_parameters(&mut model, &last, &profile);
     model.describe();
+    // θ₀'s σ as reported: the headline's, or the first segment's.
+    let whole_sigma_s = match model.model {
+        OffsetModel::Piecewise => model.segments.first().map_or(model.sigma_s, |s| s.sigma_s),
+        _ => model.sigma_s,
+    };
     Some(PoseClock {
         profile,
         model,
+        sigma_parts,
         outlier_windows: last.outliers.len(),
-        whole: (last.theta[0], last.theta_sigma[0]),
+        whole: (last.theta[0], whole_sigma_s),
         lever: (last.lever_m, last.lever_sigma_m),
         fit: Some(last),
     })
@@ -359,6 +401,7 @@ impl Mission<'_, '_> {
         model.describe();
         Some(PoseClock {
             outlier_windows: 0,
+            sigma_parts: None,
             whole: (model.offset_s, model.sigma_s),
             fit: None,
             profile,
@@ -396,18 +439,40 @@ impl Mission<'_, '_> {
 /// their scatter): the mean of the two variances, at least the formal σ. The line's σ are the
 /// fit's, at least the windows' (see the module doc). The constant's σ also adds a drift the
 /// profile measures beyond [`HIDDEN_DRIFT_Z`] of its σ; the piecewise model's headline is its
-/// longest segment's.
-fn set_parameters(model: &mut ClockModel, last: &PoseFit, profile: &OffsetProfile) {
+/// longest segment's. Returns what the headline σ was made of.
+fn set_parameters(
+    model: &mut ClockModel,
+    last: &PoseFit,
+    profile: &OffsetProfile,
+) -> Option<SigmaParts> {
     let sigma = |k: usize, floor_s: Option<f64>| {
         let s = last.theta_sigma[k].max(POSE_SIGMA_FLOOR_S);
         floor_s.map_or(s, |f| s.max(f))
     };
-    let pooled = |k: usize, windows_s: Option<f64>| match windows_s {
-        Some(w) => ((last.jackknife_sigma[k].powi(2) + w * w) / 2.0)
-            .sqrt()
-            .max(last.formal_sigma[k])
-            .max(POSE_SIGMA_FLOOR_S),
-        None => last.theta_sigma[k].max(POSE_SIGMA_FLOOR_S),
+    let parts = |k: usize, windows_s: Option<f64>, combined: SigmaCombination| SigmaParts {
+        jackknife_s: last.theta_jackknife_sigma[k],
+        formal_s: last.theta_formal_sigma[k],
+        windows_s,
+        hidden_drift_s: 0.0,
+        combined,
+    };
+    // An offset over the windows inside `span`: its σ and what it was made of.
+    let offset_sigma = |k: usize, span: (f64, f64)| {
+        let windows_s = windows_offset_sigma_s(profile, span);
+        let jackknife = last.theta_jackknife_sigma[k];
+        match windows_s {
+            Some(w) if jackknife > 0.0 && windows_inside(profile, span) >= MIN_POOLED_WINDOWS => {
+                let s = ((jackknife * jackknife + w * w) / 2.0)
+                    .sqrt()
+                    .max(last.theta_formal_sigma[k])
+                    .max(POSE_SIGMA_FLOOR_S);
+                (s, parts(k, windows_s, SigmaCombination::Pooled))
+            }
+            _ => (
+                sigma(k, windows_s),
+                parts(k, windows_s, SigmaCombination::Larger),
+            ),
+        }
     };
     match model.model {
         OffsetModel::Constant => {
@@ -420,8 +485,12 @@ fn set_parameters(model: &mut ClockModel, last: &PoseFit, profile: &OffsetProfil
                 }
                 _ => 0.0,
             };
-            let windows_s = windows_offset_sigma_s(profile, (f64::NEG_INFINITY, f64::INFINITY));
-            model.sigma_s = (pooled(0, windows_s).powi(2) + hidden * hidden).sqrt();
+            let (sigma_s, parts) = offset_sigma(0, (f64::NEG_INFINITY, f64::INFINITY));
+            model.sigma_s = (sigma_s * sigma_s + hidden * hidden).sqrt();
+            Some(SigmaParts {
+                hidden_drift_s: hidden,
+                ..parts
+            })
         }
         OffsetModel::Linear => {
             // `choose_model` left the drift's σ from the profile's line.
@@ -429,22 +498,32 @@ fn set_parameters(model: &mut ClockModel, last: &PoseFit, profile: &OffsetProfil
             let floor = windows_line_sigma_s(profile, model.t_mid);
             model.sigma_s = sigma(0, floor);
             model.drift_ppm = Some(-last.theta[1] * 1e6);
-            let floor = model
+            let drift_floor = model
                 .drift_sigma_ppm
                 .filter(|s| s.is_finite())
                 .map_or(0.0, |s| s * 1e-6);
-            model.drift_sigma_ppm = Some(last.theta_sigma[1].max(floor) * 1e6);
+            model.drift_sigma_ppm = Some(last.theta_sigma[1].max(drift_floor) * 1e6);
+            Some(parts(0, floor, SigmaCombination::Larger))
         }
         OffsetModel::Piecewise => {
+            let mut each = Vec::with_capacity(model.segments.len());
             for (k, s) in model.segments.iter_mut().enumerate() {
-                let windows_s = windows_offset_sigma_s(profile, (s.t_start, s.t_end));
+                let (sigma_s, parts) = offset_sigma(k, (s.t_start, s.t_end));
                 *s = ClockSegment {
                     offset_s: last.theta[k],
-                    sigma_s: pooled(k, windows_s),
+                    sigma_s,
                     ..*s
                 };
+                each.push(parts);
             }
             model.headline_from_longest_segment();
+            // The headline's segment: the one whose offset and σ it took.
+            model
+                .segments
+                .iter()
+                .zip(each)
+                .find(|(s, _)| s.offset_s == model.offset_s && s.sigma_s == model.sigma_s)
+                .map(|(_, p)| p)
         }
     }
 }
@@ -606,8 +685,8 @@ mod tests {
             shape,
             theta,
             lever_m: Vector3::zeros(),
-            jackknife_sigma: sigma.clone(),
-            formal_sigma: vec![0.0; n],
+            theta_jackknife_sigma: sigma.clone(),
+            theta_formal_sigma: vec![0.0; n],
             theta_sigma: sigma,
             lever_sigma_m: None,
             covariance: DMatrix::zeros(n, n),
@@ -653,11 +732,29 @@ mod tests {
         assert!(close(m.sigma_s, ms(13f64.sqrt())), "{m:?}");
         // The formal σ stays the floor.
         let mut sure = fit(ClockShape::Constant, vec![0.1], vec![ms(2.0)]);
-        sure.jackknife_sigma = vec![ms(0.3)];
-        sure.formal_sigma = vec![ms(2.0)];
+        sure.theta_jackknife_sigma = vec![ms(0.3)];
+        sure.theta_formal_sigma = vec![ms(2.0)];
         let mut m = constant();
-        set_parameters(&mut m, &sure, &p);
+        let parts = set_parameters(&mut m, &sure, &p).expect("a constant's σ has its parts");
         assert!(close(m.sigma_s, ms(2.0)), "{m:?}");
+        // The report's `sigma_parts` say so.
+        assert_eq!(parts.combined, SigmaCombination::Pooled);
+        assert!(close(parts.jackknife_s, ms(0.3)) && close(parts.formal_s, ms(2.0)));
+        assert!(close(parts.windows_s.unwrap(), ms(1.0)) && parts.hidden_drift_s == 0.0);
+        // It is the jackknife that is pooled, not the fit's σ already raised to the formal one:
+        // jackknife 0.3 ms, formal 0.5 ms, windows 1 ms give √((0.3² + 1²)/2) ms.
+        let mut raised = fit(ClockShape::Constant, vec![0.1], vec![ms(0.5)]);
+        raised.theta_jackknife_sigma = vec![ms(0.3)];
+        raised.theta_formal_sigma = vec![ms(0.5)];
+        let mut m = constant();
+        set_parameters(&mut m, &raised, &p);
+        assert!(close(m.sigma_s, ms(0.545f64.sqrt())), "{m:?}");
+        // A jackknife that saw no spread is no estimate: the larger of the fit's σ and the windows'.
+        let mut flat = fit(ClockShape::Constant, vec![0.1], vec![ms(0.5)]);
+        flat.theta_jackknife_sigma = vec![0.0];
+        let mut m = constant();
+        let parts = set_parameters(&mut m, &flat, &p).unwrap();
+        assert!(close(m.sigma_s, ms(1.0)) && parts.combined == SigmaCombination::Larger);
         // Windows scattering ±4 ms about the offset with σ 2 ms: theirs grows by the Birge ratio
         // √(χ²/dof) = √(4·4/3) before the pooling.
         let scattered = profile(|t| {
@@ -676,6 +773,39 @@ mod tests {
         let windows_s = ms(1.0) * (16.0f64 / 3.0).sqrt();
         let expected = ((ms(0.3).powi(2) + windows_s * windows_s) / 2.0).sqrt();
         assert!(close(m.sigma_s, expected), "{m:?}");
+    }
+
+    #[test]
+    fn a_segment_over_fewer_than_three_windows_keeps_the_larger() {
+        // Two segments, 0–60 s (windows at 10, 30, 50 s) and 60–80 s (the window at 70 s).
+        let p = profile(|_| 0.1);
+        let segment = |t_start: f64, t_end: f64| ClockSegment {
+            t_start,
+            t_end,
+            offset_s: 0.0,
+            sigma_s: 0.0,
+        };
+        let mut m = ClockModel {
+            model: OffsetModel::Piecewise,
+            segments: vec![segment(0.0, 60.0), segment(60.0, 80.0)],
+            ..ClockModel::constant(0.0, 0.0, String::new())
+        };
+        let shape = ClockShape::Piecewise {
+            changes: vec![60.0],
+        };
+        let parts = set_parameters(&mut m, &fit(shape, vec![0.1, 0.2], vec![3e-4, 3e-4]), &p)
+            .expect("the headline segment's parts");
+        // Three windows of 2 ms: 2/√3 ms, pooled with the jackknife's 0.3 ms.
+        let three_s = 0.002 / 3f64.sqrt();
+        let pooled_s = ((3e-4f64.powi(2) + three_s * three_s) / 2.0).sqrt();
+        assert!(close(m.segments[0].sigma_s, pooled_s), "{m:?}");
+        assert_eq!(parts.combined, SigmaCombination::Pooled);
+        assert!(
+            close(m.sigma_s, pooled_s),
+            "the longest segment is the headline"
+        );
+        // One window: its 2 ms, the larger.
+        assert!(close(m.segments[1].sigma_s, 0.002), "{m:?}");
     }
 
     #[test]

@@ -203,6 +203,11 @@ pub struct TimeOffsetReport {
     /// the profile's mid-time; piecewise: the longest segment's).
     #[serde(default)]
     pub sigma_s: Option<f64>,
+    /// What the pose fit's headline σ was made of: the final fit's jackknife and formal σ, the
+    /// profile windows' σ for the same parameter, a hidden drift, and how they were combined
+    /// ([`crate::align::pose_model::SigmaParts`]). Absent when the pose fit did not give the σ.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma_parts: Option<crate::align::pose_model::SigmaParts>,
     /// Piecewise: the segments of constant offset, absolute seconds on the reference clock.
     #[serde(default)]
     pub segments: Vec<OffsetSegmentReport>,

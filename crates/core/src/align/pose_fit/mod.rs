@@ -193,10 +193,11 @@ pub struct PoseFit {
     pub lever_m: Vector3<f64>,
     /// Standard errors of θ and of D (D's when fitted): the jackknife's, at least the formal ones.
     pub theta_sigma: Vec<f64>,
-    /// θ's standard errors apart: the jackknife's and the formal ones (0 where the formal
-    /// covariance could not be formed); `theta_sigma` is the larger of each pair.
-    pub jackknife_sigma: Vec<f64>,
-    pub formal_sigma: Vec<f64>,
+    /// θ's jackknife standard errors (before the formal floor); `theta_sigma[k]` is the larger of
+    /// this and `theta_formal_sigma[k]` (the formal one where the jackknife saw no spread).
+    pub theta_jackknife_sigma: Vec<f64>,
+    /// θ's formal standard errors (0 where the formal covariance could not be formed).
+    pub theta_formal_sigma: Vec<f64>,
     pub lever_sigma_m: Option<Vector3<f64>>,
     /// The covariance of (θ, D): the jackknife's, each variance raised to at least the formal one.
     pub covariance: DMatrix<f64>,

@@ -583,12 +583,12 @@ impl SharedFit<'_> {
             .filter_map(|(w, t)| t.as_ref().map(|t| (w, t)))
             .collect();
         let mut cov = self.jackknife(&x.terms, &jac)?;
-        let jackknife_sigma: Vec<f64> = (0..m).map(|k| cov[(k, k)].max(0.0).sqrt()).collect();
-        let mut formal_sigma = vec![0.0; m];
+        let theta_jackknife_sigma: Vec<f64> = (0..m).map(|k| cov[(k, k)].max(0.0).sqrt()).collect();
+        let mut theta_formal_sigma = vec![0.0; m];
         // The formal σ is the floor (see the module doc): each parameter's variance raised to it,
         // the jackknife's correlations kept.
         if let Some(formal) = self.formal_covariance(&x.terms, &jac, &h) {
-            for (k, s) in formal_sigma.iter_mut().enumerate() {
+            for (k, s) in theta_formal_sigma.iter_mut().enumerate() {
                 *s = formal[(k, k)].max(0.0).sqrt();
             }
             let raise: Vec<f64> = (0..p)
@@ -639,8 +639,8 @@ impl SharedFit<'_> {
             theta: x.theta,
             lever_m: d,
             theta_sigma: (0..m).map(sig).collect(),
-            jackknife_sigma,
-            formal_sigma,
+            theta_jackknife_sigma,
+            theta_formal_sigma,
             lever_sigma_m: with_lever.then(|| Vector3::new(sig(m), sig(m + 1), sig(m + 2))),
             covariance: cov,
             variance_inflation,

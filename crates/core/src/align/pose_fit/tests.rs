@@ -199,6 +199,15 @@ fn the_sigma_of_the_offset_is_the_spread_of_its_answers() {
         let (h, _, _) = shared.summed(&terms, &f.lever_m, l, 1.0);
         let formal = shared.formal_covariance(&terms, &jac, &h).unwrap();
         assert!(f.theta_sigma[0] >= 0.999 * formal[(0, 0)].sqrt());
+        // The pieces kept apart: θ's σ is the larger of its jackknife and its formal σ.
+        let (jack, formal_k) = (f.theta_jackknife_sigma[0], f.theta_formal_sigma[0]);
+        assert!((formal_k - formal[(0, 0)].sqrt()).abs() <= 1e-12 * formal_k.max(1e-9));
+        let larger = if jack > 0.0 {
+            jack.max(formal_k)
+        } else {
+            formal_k
+        };
+        assert!((f.theta_sigma[0] - larger).abs() <= 1e-12 * larger.max(1e-9));
         errors2 += (f.theta[0] - dt_true).powi(2);
         sigmas2 += f.theta_sigma[0].powi(2);
         formal2 += formal[(0, 0)];
