@@ -754,7 +754,8 @@ fn speed_views(
     (SignalView::of(r), e)
 }
 
-/// The reason's note on the pose fit: its windows, its whole-mission Δt and lever, the windows left
+/// The reason's note on the pose fit: its windows, its first clock parameter (the constant, the
+/// line's offset at t_mid or the first segment's) with its σ, its lever, the windows left
 /// out as jumps, and when the lever and Δt are inseparable.
 fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
     let (lever, _) = pc.lever;
@@ -782,7 +783,7 @@ fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
     note
 }
 
-/// The pose fit's row of `methods`: its whole-mission Δt and its windows' median correlation.
+/// The pose fit's row of `methods`: its first clock parameter and its windows' median correlation.
 fn pose_entry(pc: &crate::align::pose_model::PoseClock) -> OffsetMethodReport {
     OffsetMethodReport {
         method: OffsetMethod::Pose,

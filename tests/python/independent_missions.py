@@ -6,12 +6,13 @@ error bar tuned against one simulator can learn its habits. This script draws mi
 another path model, gait, odometry drift and noise, all in NumPy — writes them as TUM files and
 grades the Δt `trajdrift eval --reference-file ref.tum --estimate-file est.tum --json` reports:
 
-- the body path integrates a speed and a turn rate made of random sinusoids (ground: 0.8–2.5 m/s;
-  legged: 0.25–0.6 m/s with a gait of 1.4–2.6 Hz that bobs, sways, rolls, pitches and yaws the body
+- the body path integrates a speed and a turn rate made of random sinusoids (a base speed, ground
+  0.8–2.5 m/s, legged 0.25–0.6 m/s, varied slowly by the sinusoids; legged with a gait of 1.4–2.6 Hz that bobs, sways, rolls, pitches and yaws the body
   and modulates its speed), over terrain whose slope pitches the body; `turns` stops to turn in
   place, `straight` hardly turns;
 - the reference is a point on the body (an antenna lever up to 0.3 m) at 1–20 Hz with white noise of
-  0.5–3 cm and a slowly wandering bias (first order, τ = 100 s, 1 cm); `outages` drops it for 20–60 s
+  0.5–3 cm and a slowly wandering bias (first order, 1 cm, correlated over 100·rate samples:
+  τ = 100 s between samples, not across an outage); `outages` drops it for 20–60 s
   two or three times; `receipt` stamps both streams late by exponential latencies (truth: the
   offset plus the mean latencies' difference);
 - the estimate is a second body point (lever up to 0.3 m across, 0.5 m up) at 10–200 Hz, its
@@ -22,7 +23,8 @@ grades the Δt `trajdrift eval --reference-file ref.tum --estimate-file est.tum 
     cargo build --release
     python3 tests/python/independent_missions.py --trajdrift target/release/trajdrift --missions 20 --seed 1
 
-prints one row per mission and the summary the fidelity acceptance asks of constant clocks: the
+prints one row per mission (with the lead: the estimate's sensor ahead of the reference's point
+over the mean speed, what the signal searches read as a clock offset) and the summary the fidelity acceptance asks of constant clocks: the
 |error| median and worst, the share 2σ covers, the median |error|/σ, σ above 50 ms at an error below
 10 ms, and clock alarms. Needs NumPy.
 """
@@ -180,7 +182,18 @@ def mission(kind, seed):
     epoch = 1.7e9
     order_ref = np.argsort(stamps_ref, kind="stable")
     order_est = np.argsort(stamps_est, kind="stable")
-    info = dict(kind=kind, seed=seed, legged=legged, ref_hz=ref_hz, est_hz=est_hz, noise_mm=1e3 * noise_m, truth_s=truth_s)
+    info = dict(
+        kind=kind,
+        seed=seed,
+        legged=legged,
+        ref_hz=ref_hz,
+        est_hz=est_hz,
+        noise_mm=1e3 * noise_m,
+        truth_s=truth_s,
+        ref_lever_m=ref_lever.tolist(),
+        est_lever_m=est_lever.tolist(),
+        lead_s=float((est_lever - ref_lever)[0] / v.mean()),
+    )
     return (epoch + stamps_ref[order_ref], ref[order_ref]), (epoch + stamps_est[order_est], est[order_est], q_est[order_est]), info
 
 
@@ -216,6 +229,7 @@ def main():
     ap.add_argument("--trajdrift", default="target/release/trajdrift")
     ap.add_argument("--missions", type=int, default=10, help="missions of each kind")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--keep", metavar="DIR", help="keep each mission's TUM files and truth in DIR")
     args = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as workdir:
@@ -223,6 +237,12 @@ def main():
             for k in range(args.missions):
                 seed = args.seed * 1000 + KINDS.index(kind) * 100 + k
                 ref, est, info = mission(kind, seed)
+                if args.keep:
+                    os.makedirs(args.keep, exist_ok=True)
+                    write_tum(os.path.join(args.keep, f"{kind}{seed}_ref.tum"), *ref)
+                    write_tum(os.path.join(args.keep, f"{kind}{seed}_est.tum"), *est)
+                    with open(os.path.join(args.keep, f"{kind}{seed}_truth.json"), "w") as f:
+                        json.dump(info, f, indent=1)
                 o, codes = evaluate(args.trajdrift, ref, est, workdir)
                 if o is None:
                     print(f"{kind:9} {seed:6} FAILED {codes}")
@@ -235,6 +255,7 @@ def main():
                 print(
                     f"{kind:9} {seed:6} {'legged' if info['legged'] else 'ground':6} ref {info['ref_hz']:4.0f} Hz est {info['est_hz']:4.0f} Hz "
                     f"noise {info['noise_mm']:4.1f} mm  error {1e3 * err:+7.2f} ms  σ {1e3 * (sigma or float('nan')):6.2f} ms  "
+                    f"lead {1e3 * info['lead_s']:+5.0f} ms  "
                     f"{o.get('method')} {o.get('model')}{'  ALARM' if alarm else ''}",
                     flush=True,
                 )

@@ -42,6 +42,8 @@ RULES = {
     "larger of the three": lambda p, g: with_hidden(
         p, max(p["jackknife_s"], p["formal_s"], p["windows_s"] or 0.0, FLOOR_S)
     ),
+    # The constant's rule as it pools (every constant clock of the validation has three windows or
+    # more and a jackknife that saw a spread; `combined` in each grade says which rule applied).
     "pooled, at least formal": lambda p, g: with_hidden(
         p,
         max(

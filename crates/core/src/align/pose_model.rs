@@ -79,7 +79,9 @@ pub const DEEP_SEARCH_SIGMA_S: f64 = 0.002;
 pub enum SigmaCombination {
     /// An offset (constant, a segment): the mean of the two variances, at least the formal σ.
     Pooled,
-    /// The line: the larger of the fit's σ (the jackknife, at least the formal) and the windows'.
+    /// The larger of the fit's σ (the jackknife, at least the formal) and the windows': the line's
+    /// rule, and an offset's over fewer than three windows, without windows, or where the jackknife
+    /// saw no spread.
     Larger,
 }
 
@@ -92,7 +94,8 @@ pub struct SigmaParts {
     /// The final fit's formal σ (what white residuals would give; 0 when it could not be formed).
     pub formal_s: f64,
     /// The profile's windows for the same parameter, the lever held (their calibrated σ combined
-    /// and raised by their scatter about it); `None` without a window inside its span.
+    /// and raised by their scatter about it); `None` without a window inside an offset's span, or
+    /// fewer than two for the line.
     pub windows_s: Option<f64>,
     /// A drift below the resolution the constant could hide, added in quadrature (0 otherwise).
     pub hidden_drift_s: f64,
