@@ -64,7 +64,7 @@ pub use trajdrift_core::report::json::{
 };
 /// Grading the default evaluation against simulated missions with a known truth (`trajdrift validate`).
 pub use validate::{
-    calibration, evaluate_pair, run as validate_missions, Calibration, MissionGrade,
+    calibration, evaluate_pair, run as validate_missions, run_scenario, Calibration, MissionGrade,
     ValidateOptions,
 };
 

@@ -479,7 +479,9 @@ fn accepted_offset(
     } = searched;
     let posed = match est.trajectory.orientations.as_deref() {
         Some(q) if config.pose_fit() => {
-            pose_over_time(config, params, pair, q, o, &est.name, t0_ns)
+            pose_over_time(config, params, pair, q, o, &methods, &est.name, t0_ns).or_else(|| {
+                pose_from_another_answer(config, params, pair, q, o, &methods, est, t0_ns)
+            })
         }
         _ => None,
     };
@@ -506,6 +508,57 @@ fn accepted_offset(
         ..report
     };
     (report, w)
+}
+
+/// The pose fit from another confident search's answer, when it could not be made from the one
+/// applied (`o`) and that one lies beyond the fit's reach ([`MAX_DISAGREEMENT_S`]): two searches
+/// that disagree by seconds are a lever read as a lead by one of them, or a speed profile matched
+/// at a wrong lag, and the positions tell which only from a start near the truth. Accepted only
+/// when the fit converged with its lever (its σ has its parts); the note says where it started.
+///
+/// [`MAX_DISAGREEMENT_S`]: crate::align::pose_model::MAX_DISAGREEMENT_S
+#[allow(clippy::too_many_arguments)]
+fn pose_from_another_answer(
+    config: &EvalConfig,
+    params: &crate::align::time_offset::OffsetParams,
+    pair: &Pair<'_>,
+    orientations: &[nalgebra::UnitQuaternion<f64>],
+    o: &OffsetEstimate,
+    methods: &[OffsetMethodReport],
+    est: &Loaded,
+    t0_ns: i64,
+) -> Option<(TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport)> {
+    use crate::align::pose_model::MAX_DISAGREEMENT_S;
+    methods
+        .iter()
+        .filter(|m| m.status == MethodStatus::Ok && m.method != o.method)
+        .filter_map(|m| Some((m.method, m.offset_s?)))
+        .filter(|(_, offset_s)| (offset_s - o.offset_s).abs() > MAX_DISAGREEMENT_S)
+        .find_map(|(method, offset_s)| {
+            let start = OffsetEstimate {
+                method,
+                offset_s,
+                ..*o
+            };
+            let (report, w, note, entry) =
+                pose_over_time(
+                config,
+                params,
+                pair,
+                orientations,
+                &start,
+                methods,
+                &est.name,
+                t0_ns,
+            )?;
+            report.sigma_parts.is_some().then(|| {
+                let note = format!(
+                    "the pose fit did not converge from {}'s answer and started from {}'s ({:+.3} s): {note}",
+                    o.method, method, offset_s
+                );
+                (report, w, note, entry)
+            })
+        })
 }
 
 /// No confident peak: nothing applied (0 s), the best answer reported, a warning saying what to do.
@@ -656,8 +709,9 @@ fn drift_report(r: &DriftErrorResult, t0_s: f64) -> DriftErrorReport {
 }
 
 /// The clock model from the pose fit ([`crate::align::pose_model`]) around the signal searches'
-/// answer `o`: the report's fields, the warnings of a non-constant model chosen from the data, the
-/// note for the reason, and the `pose` entry of `methods`. `None` when the fit cannot be made (the
+/// answer `o` (the other confident searches' answers in `methods` widen its lead search): the
+/// report's fields, the warnings of a non-constant model chosen from the data, the note for the
+/// reason, and the `pose` entry of `methods`. `None` when the fit cannot be made (the
 /// signal searches' profile is used instead).
 #[allow(clippy::too_many_arguments)]
 fn pose_over_time(
@@ -666,10 +720,17 @@ fn pose_over_time(
     pair: &Pair<'_>,
     orientations: &[nalgebra::UnitQuaternion<f64>],
     o: &OffsetEstimate,
+    methods: &[OffsetMethodReport],
     name: &str,
     t0_ns: i64,
 ) -> Option<(TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport)> {
     use crate::align::pose_model::pose_clock_model;
+    // The other confident searches' answers: the lead search scans about them too.
+    let other_answers_s: Vec<f64> = methods
+        .iter()
+        .filter(|m| m.status == MethodStatus::Ok && m.method != o.method)
+        .filter_map(|m| m.offset_s)
+        .collect();
     let gap_s = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
     let jumps = crate::align::jumps::jumps(pair.estimate.0, pair.estimate.1, gap_s);
     let data = pose_data(pair, orientations, &jumps, gap_s);
@@ -693,6 +754,7 @@ fn pose_over_time(
     let pc = pose_clock_model(
         &data,
         o.offset_s,
+        &other_answers_s,
         &config.params.offset_profile(),
         &signals,
         config.params.forced_offset_model(),
@@ -756,7 +818,8 @@ fn speed_views(
 
 /// The reason's note on the pose fit: its windows, its first clock parameter (the constant, the
 /// line's offset at t_mid or the first segment's) with its σ, its lever, the windows left
-/// out as jumps, and when the lever and Δt are inseparable.
+/// out as jumps, and when the lever and Δt are inseparable (locally, or between two fits along the
+/// forward lever's valley).
 fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
     let (lever, _) = pc.lever;
     let mut note = format!(
@@ -775,7 +838,12 @@ fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
             pc.outlier_windows
         ));
     }
-    if pc.fit.as_ref().is_some_and(|f| f.inseparable()) {
+    if let Some(valley_s) = pc.sigma_parts.map(|p| p.valley_s).filter(|v| *v > 0.0) {
+        note.push_str(&format!(
+            "; a fit {:.2} s away, the sensor moved along the direction of travel, fits the windows about as well (a forward lever and Δt trade at a steady walk): σ covers it",
+            2.0 * valley_s
+        ));
+    } else if pc.fit.as_ref().is_some_and(|f| f.inseparable()) {
         note.push_str(
             "; at this mission's nearly constant speed a forward lever and Δt are inseparable: σ says how much",
         );

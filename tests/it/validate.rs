@@ -444,3 +444,43 @@ fn validate_like_takes_its_shape_from_text_trajectories_too() {
     assert!(table.contains("simulated as a legged robot"), "{table}");
     assert!(table.contains("| 2 | 2 |"), "{table}");
 }
+
+/// A legged robot walking at one speed without stopping or turning in place, its estimate's sensor
+/// 0.3 m ahead of the reference's point: the signal searches read that lever as a clock offset of
+/// 1 s (0.3 m at 0.3 m/s), beyond the pose fit's usual reach from their answer. The lead search
+/// (`align::pose_model`) finds the offset along the valley where Δt trades against the lever.
+#[test]
+fn a_walk_with_the_sensor_ahead_is_not_read_as_a_clock_offset() {
+    use trajdrift::simulate::scenario::Leg;
+    let mut s = Scenario::draw(MissionKind::Legged, 7);
+    let leg = |k: usize| Leg {
+        duration_s: 15.0,
+        speed_mps: if k == 0 { 0.0 } else { 0.3 },
+        curvature: if k == 0 {
+            0.0
+        } else {
+            0.4 * (k as f64 * 1.7).sin()
+        },
+        spin_rps: 0.0,
+    };
+    s.route = (0..41).map(leg).collect();
+    s.outages.clear();
+    s.jumps.clear();
+    s.receipt_latency_s = None;
+    s.clock_step = None;
+    s.clock_drift_ppm = 0.0;
+    s.ref_lever_m = [0.0, 0.0, 0.0];
+    s.est_lever_m = [0.3, 0.05, 0.2];
+    s.time_offset_s = 0.1;
+    let g = trajdrift::run_scenario(&s);
+    let what = format!(
+        "{:?} {:?} {:?} {:?}",
+        g.method, g.model, g.error_s, g.sigma_s
+    );
+    assert_eq!(g.status, Some(TimeOffsetStatus::Ok), "{what}");
+    assert!(g.error_s.unwrap().abs() <= 0.010, "{what}");
+    assert!(
+        g.error_s.unwrap().abs() <= 3.0 * g.sigma_s.unwrap(),
+        "{what}"
+    );
+}

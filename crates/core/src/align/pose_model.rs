@@ -29,6 +29,24 @@
 //!    from 95 % to 93 %. The report's `time_offset.sigma_parts` gives the pieces and the rule
 //!    ([`SigmaParts`]).
 //!
+//! **The lead search.** The signal searches read a sensor ahead of the other as a clock offset of
+//! lever/speed (at a walk, a 0.3 m lever is a second), and the fit from there stays in the long
+//! valley where Δt trades against the forward lever, which only the gait's ripple of the speed and
+//! the turns slope; a speed search can match a smooth walking speed at a wrong lag, confidently.
+//! Where the windows chose one constant clock and [`LEAD_LEVER_M`] over the reference's median
+//! speed (the lead, at most [`MAX_LEAD_S`]) exceeds [`LEAD_REACH`] times [`MAX_DISAGREEMENT_S`],
+//! Δt is scanned from the lead before the earliest confident search's answer to the lead after the
+//! latest, the lever solved at each candidate ([`pose_fit::coarse_minima`]); constant fits start
+//! from the scan's best minima (with the lever found there, else none) and compete with the near
+//! fit on their residual per point over every window. The best replaces the near fit when the
+//! profile measured from it chooses a constant clock too (only then: across a clock step the
+//! constant trades its lever for Δt as well, and the other segment's basin fits better). Where
+//! another fit is not worse beyond [`LEAD_SIGNIFICANCE_T`] (a paired t over the windows'
+//! residuals: the windows are independent where the points are not), the data cannot tell the
+//! two apart, and the constant's σ adds half their distance in quadrature
+//! (`sigma_parts.valley_s`). Measured on a second simulator's missions (docs/evidence.md, "A
+//! second simulator").
+//!
 //! A constant clock whose drift the data cannot resolve could still hide one below the resolution:
 //! when the profile's line measures a drift d beyond [`HIDDEN_DRIFT_Z`] of its σ_d (a drift the data
 //! suggest without resolving it), the constant's σ adds the part of it beyond its noise,
@@ -56,6 +74,28 @@ pub const POSE_SIGMA_FLOOR_S: f64 = 1e-4;
 /// The pose fit's Δt may differ from the signal search's by this much at most, seconds: farther, the
 /// fit went to another basin and is not used.
 pub const MAX_DISAGREEMENT_S: f64 = 0.3;
+/// The largest lever between the two sensors the lead search allows for, metres.
+pub const LEAD_LEVER_M: f64 = 0.5;
+/// The lead at most, seconds (a lever of 0.5 m at 0.2 m/s).
+pub const MAX_LEAD_S: f64 = 2.5;
+/// The lead search's step, seconds.
+pub const LEAD_STEP_S: f64 = 0.1;
+/// The lead search fits from this many of its best minima at most (outside the near fit's basin).
+pub const LEAD_MINIMA: usize = 3;
+/// A fit along the valley is told from another when the windows' residuals, paired, differ by at
+/// least this many of their standard errors (a t statistic); nearer, σ covers both (see the module
+/// doc).
+pub const LEAD_SIGNIFICANCE_T: f64 = 2.0;
+/// The lead search's scan looks at this many windows at most (evenly spread).
+pub const LEAD_SCAN_WINDOWS: usize = 60;
+/// The lead search runs where the lead can exceed this many times [`MAX_DISAGREEMENT_S`] (below
+/// 0.83 m/s: walking robots; a vehicle's speed search, immune to a forward lever, starts the fit
+/// near enough, and the search would cost a long mission's evaluation a fifth more).
+pub const LEAD_REACH: f64 = 2.0;
+/// The span of the reference's speed for the lead, seconds.
+const SPEED_SPAN_S: f64 = 1.0;
+/// Below this median speed the lead search does not run (a robot standing), m/s.
+const MIN_WALKING_SPEED_MPS: f64 = 0.05;
 /// The step of the coarse search for a start when the fit from the signal search's answer does not
 /// converge, seconds (the fit converged from 34–100 ms off where it stalled from 64–218 ms).
 pub const COARSE_STEP_S: f64 = 0.025;
@@ -99,6 +139,10 @@ pub struct SigmaParts {
     pub windows_s: Option<f64>,
     /// A drift below the resolution the constant could hide, added in quadrature (0 otherwise).
     pub hidden_drift_s: f64,
+    /// Half the distance to a fit along the forward lever's valley that the windows do not find
+    /// worse (the lead search, see the module doc), added in quadrature (0 otherwise).
+    #[serde(default)]
+    pub valley_s: f64,
     pub combined: SigmaCombination,
 }
 
@@ -126,11 +170,13 @@ pub struct PoseClock {
 pub type Signals<'a> = &'a dyn Fn() -> Option<(SignalView<'a>, SignalView<'a>)>;
 
 /// The clock model of the mission in `data` from the pose fit, starting at `start_s` (the signal
-/// searches' answer); `None` when the fit cannot be made (too few windows, no convergence, or an
-/// answer farther than [`MAX_DISAGREEMENT_S`] from the start).
+/// searches' answer; the other confident searches' answers `other_answers_s` widen the lead
+/// search); `None` when the fit cannot be made (too few windows, no convergence, or an answer
+/// farther than [`MAX_DISAGREEMENT_S`] from the start that the lead search did not find).
 pub fn pose_clock_model(
     data: &PoseData<'_>,
     start_s: f64,
+    other_answers_s: &[f64],
     profile_params: &ProfileParams,
     signals: Signals<'_>,
     forced: Option<OffsetModel>,
@@ -146,7 +192,7 @@ pub fn pose_clock_model(
     if windows.len() < 3 {
         return None;
     }
-    let mission = Mission {
+    let mut mission = Mission {
         data: &data,
         // The profile's windows: the fits' own (disjoint), or every `--offset-step` seconds.
         profile_windows: data.profile_windows(profile_params.step_s),
@@ -155,14 +201,47 @@ pub fn pose_clock_model(
         signals,
         forced,
     };
-    let chosen = mission.choose(start_s)?;
+    let mut chosen = mission.choose(start_s)?;
+    // The lead search, only where the windows chose one constant clock: across a clock step the
+    // constant trades its lever for Δt as well, and the other segment's basin fits better.
+    let lead = (chosen.model.model == OffsetModel::Constant
+        && matches!(forced, None | Some(OffsetModel::Constant)))
+    .then(|| {
+        let answers: Vec<f64> = std::iter::once(start_s)
+            .chain(other_answers_s.iter().copied())
+            .filter(|a| (a - start_s).abs() <= 2.0 * MAX_LEAD_S)
+            .collect();
+        lead_search(&data, &mission.windows, &answers, mission.whole.as_ref())
+    })
+    .flatten();
+    if let Some(far) = lead.as_ref().and_then(|l| l.far(mission.whole.as_ref())) {
+        let other = Mission {
+            whole: Some(far),
+            windows: mission.windows.clone(),
+            profile_windows: mission.profile_windows.clone(),
+            ..mission
+        };
+        if let Some(c) = other
+            .choose(start_s)
+            .filter(|c| c.model.model == OffsetModel::Constant)
+        {
+            (mission, chosen) = (other, c);
+        }
+    }
     // Without a converged fit of the chosen model, its parameters stay those of the windows.
     let Some(last) = chosen.fit else {
         return mission.without_fit(chosen.profile, chosen.model, chosen.lever_m);
     };
     let (profile, mut model) = (chosen.profile, chosen.model);
     let last = mission.drift_resolved(&mut model, last);
-    let sigma_parts = set_parameters(&mut model, &last, &profile);
+    let valley_s = match (&lead, model.model) {
+        (Some(lead), OffsetModel::Constant) => lead.valley_s(
+            &last,
+            &pose_fit::window_residuals(&data, &mission.windows, &last),
+        ),
+        _ => 0.0,
+    };
+    let sigma_parts = set_parameters(&mut model, &last, &profile, valley_s);
     model.describe();
     // θ₀'s σ as reported: the headline's, or the first segment's.
     let whole_sigma_s = match model.model {
@@ -207,6 +286,171 @@ fn whole_mission_fit(
             .then(|| from(coarse))
             .flatten()
     })
+}
+
+/// What the lead search found: the fits along the forward lever's valley (the near one among
+/// them), each with its residual per point in every window.
+struct Lead {
+    fits: Vec<(PoseFit, Vec<Option<f64>>)>,
+}
+
+impl Lead {
+    /// The fit with the least residual per point over every window, when it is not the near one.
+    fn far(&self, near: Option<&PoseFit>) -> Option<PoseFit> {
+        let best = self
+            .fits
+            .iter()
+            .min_by(|a, b| mean(&a.1).total_cmp(&mean(&b.1)))?;
+        (!near.is_some_and(|n| same_basin(n, &best.0))).then(|| best.0.clone())
+    }
+
+    /// Half the largest distance from `reported`'s Δt (residuals per window `residuals`) to a fit
+    /// the windows do not find worse beyond [`LEAD_SIGNIFICANCE_T`], seconds: how far along the
+    /// valley the data leave Δt undecided (0 when every other fit is worse).
+    fn valley_s(&self, reported: &PoseFit, residuals: &[Option<f64>]) -> f64 {
+        self.fits
+            .iter()
+            .filter(|(f, r)| {
+                !same_basin(f, reported) && paired_t(r, residuals) < LEAD_SIGNIFICANCE_T
+            })
+            .map(|(f, _)| (f.theta[0] - reported.theta[0]).abs() / 2.0)
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Two constant fits in one basin: their Δt within a step of the lead search.
+fn same_basin(a: &PoseFit, b: &PoseFit) -> bool {
+    (a.theta[0] - b.theta[0]).abs() <= LEAD_STEP_S
+}
+
+/// The mean of the windows' residuals per point that are there.
+fn mean(r: &[Option<f64>]) -> f64 {
+    let (sum, n) = r
+        .iter()
+        .flatten()
+        .fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    if n == 0 {
+        f64::INFINITY
+    } else {
+        sum / n as f64
+    }
+}
+
+/// The lead search (see the module doc): constant fits from the best minima of a scan of Δt over
+/// the lead a forward lever can make at the reference's walking speed about the confident
+/// searches' answers `answers_s`, with the fit `near` (the whole mission's, from the applied
+/// answer); `None` where the robot is not walking or the lead cannot leave the near fit's reach.
+fn lead_search(
+    data: &PoseData<'_>,
+    windows: &[pose_fit::Window],
+    answers_s: &[f64],
+    near: Option<&PoseFit>,
+) -> Option<Lead> {
+    // A sensor ahead of the other reads as a clock offset of lever/speed in the signal searches,
+    // which at a walk lies beyond MAX_DISAGREEMENT_S; the positions with the lever fitted tell
+    // the two apart only along a long, shallow valley the fit from there does not leave, rippled
+    // by the gait. The lever solved at every candidate along it (over a sample of the windows on
+    // long missions: the scan only finds basins), the fits from its best minima compete with the
+    // near one on their residual over every window (the scan's own ranking is not trusted: its
+    // grid samples the gait's ripples unevenly).
+    let speed_mps = walking_speed_mps(data)?;
+    let lead_s = LEAD_LEVER_M / speed_mps;
+    if lead_s <= LEAD_REACH * MAX_DISAGREEMENT_S {
+        return None;
+    }
+    let lead_s = lead_s.min(MAX_LEAD_S);
+    // Over the lead about every answer: a speed search can match a smooth speed at a wrong lag
+    // with confidence, and the curvature searches' answer then lies the lead from the truth.
+    let (lo, hi) = answers_s
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), a| {
+            (lo.min(*a), hi.max(*a))
+        });
+    let (lo, hi) = (lo - lead_s, hi + lead_s);
+    let stride = windows.len().div_ceil(LEAD_SCAN_WINDOWS).max(1);
+    let sample: Vec<pose_fit::Window> = windows.iter().step_by(stride).cloned().collect();
+    let minima = pose_fit::coarse_minima(
+        data,
+        &sample,
+        (lo + hi) / 2.0,
+        ((hi - lo) / 2.0, LEAD_STEP_S),
+        LEAD_MINIMA + 1,
+    );
+    // The fit from each minimum, its lever the scan's there, or none when that does not converge
+    // (a lever settled on a sample of the windows can start the fit outside the basin).
+    let fit_from = |theta: f64, lever: Vector3<f64>| {
+        pose_fit::fit(
+            data,
+            windows,
+            ClockShape::Constant,
+            vec![theta],
+            lever,
+            true,
+        )
+        .filter(|f| {
+            f.converged
+                && f.theta[0] >= lo - MAX_DISAGREEMENT_S
+                && f.theta[0] <= hi + MAX_DISAGREEMENT_S
+        })
+    };
+    let far = minima
+        .into_iter()
+        .filter(|m| near.is_none_or(|n| (n.theta[0] - m.0).abs() > LEAD_STEP_S))
+        .take(LEAD_MINIMA)
+        .filter_map(|(theta, _, lever)| {
+            fit_from(theta, lever).or_else(|| fit_from(theta, Vector3::zeros()))
+        });
+    let fits = far
+        .chain(near.cloned())
+        .map(|f| {
+            let r = pose_fit::window_residuals(data, windows, &f);
+            (f, r)
+        })
+        .collect();
+    Some(Lead { fits })
+}
+
+/// The paired t statistic of `a` − `b` over the windows both have (negative: `a` fits better).
+fn paired_t(a: &[Option<f64>], b: &[Option<f64>]) -> f64 {
+    let d: Vec<f64> = a
+        .iter()
+        .zip(b)
+        .filter_map(|(a, b)| Some((*a)? - (*b)?))
+        .collect();
+    let k = d.len() as f64;
+    if k < 2.0 {
+        return 0.0;
+    }
+    let mean = d.iter().sum::<f64>() / k;
+    let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (k - 1.0);
+    if var > 0.0 {
+        mean / (var / k).sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// The median speed of the reference over spans of at least [`SPEED_SPAN_S`] (long enough that
+/// its noise does not read as motion), metres per second; `None` when it hardly moves.
+fn walking_speed_mps(data: &PoseData<'_>) -> Option<f64> {
+    let (t, p) = (data.ref_t, data.ref_p);
+    let mut speeds = Vec::new();
+    let mut i = 0;
+    for j in 1..t.len() {
+        let dt = t[j] - t[i];
+        if dt >= SPEED_SPAN_S {
+            if dt <= 2.0 * SPEED_SPAN_S {
+                speeds.push((p[j] - p[i]).norm() / dt);
+            }
+            i = j;
+        }
+    }
+    if speeds.is_empty() {
+        return None;
+    }
+    let mid = speeds.len() / 2;
+    let (_, m, _) = speeds.select_nth_unstable_by(mid, f64::total_cmp);
+    (*m > MIN_WALKING_SPEED_MPS).then_some(*m)
 }
 
 /// One mission's pose fits: the data, the windows of the fits and of the profile, the whole
@@ -447,6 +691,7 @@ fn set_parameters(
     model: &mut ClockModel,
     last: &PoseFit,
     profile: &OffsetProfile,
+    valley_s: f64,
 ) -> Option<SigmaParts> {
     let sigma = |k: usize, floor_s: Option<f64>| {
         let s = last.theta_sigma[k].max(POSE_SIGMA_FLOOR_S);
@@ -457,6 +702,7 @@ fn set_parameters(
         formal_s: last.theta_formal_sigma[k],
         windows_s,
         hidden_drift_s: 0.0,
+        valley_s: 0.0,
         combined,
     };
     // An offset over the windows inside `span`: its σ and what it was made of.
@@ -489,9 +735,10 @@ fn set_parameters(
                 _ => 0.0,
             };
             let (sigma_s, parts) = offset_sigma(0, (f64::NEG_INFINITY, f64::INFINITY));
-            model.sigma_s = (sigma_s * sigma_s + hidden * hidden).sqrt();
+            model.sigma_s = (sigma_s * sigma_s + hidden * hidden + valley_s * valley_s).sqrt();
             Some(SigmaParts {
                 hidden_drift_s: hidden,
+                valley_s,
                 ..parts
             })
         }
@@ -720,6 +967,7 @@ mod tests {
             &mut m,
             &fit(ClockShape::Constant, vec![0.1], vec![ms(0.3)]),
             &p,
+            0.0,
         );
         assert!(
             close(m.offset_s, 0.1) && close(m.sigma_s, ms(0.545f64.sqrt())),
@@ -731,6 +979,7 @@ mod tests {
             &mut m,
             &fit(ClockShape::Constant, vec![0.1], vec![ms(5.0)]),
             &p,
+            0.0,
         );
         assert!(close(m.sigma_s, ms(13f64.sqrt())), "{m:?}");
         // The formal σ stays the floor.
@@ -738,7 +987,7 @@ mod tests {
         sure.theta_jackknife_sigma = vec![ms(0.3)];
         sure.theta_formal_sigma = vec![ms(2.0)];
         let mut m = constant();
-        let parts = set_parameters(&mut m, &sure, &p).expect("a constant's σ has its parts");
+        let parts = set_parameters(&mut m, &sure, &p, 0.0).expect("a constant's σ has its parts");
         assert!(close(m.sigma_s, ms(2.0)), "{m:?}");
         // The report's `sigma_parts` say so.
         assert_eq!(parts.combined, SigmaCombination::Pooled);
@@ -750,13 +999,13 @@ mod tests {
         raised.theta_jackknife_sigma = vec![ms(0.3)];
         raised.theta_formal_sigma = vec![ms(0.5)];
         let mut m = constant();
-        set_parameters(&mut m, &raised, &p);
+        set_parameters(&mut m, &raised, &p, 0.0);
         assert!(close(m.sigma_s, ms(0.545f64.sqrt())), "{m:?}");
         // A jackknife that saw no spread is no estimate: the larger of the fit's σ and the windows'.
         let mut flat = fit(ClockShape::Constant, vec![0.1], vec![ms(0.5)]);
         flat.theta_jackknife_sigma = vec![0.0];
         let mut m = constant();
-        let parts = set_parameters(&mut m, &flat, &p).unwrap();
+        let parts = set_parameters(&mut m, &flat, &p, 0.0).unwrap();
         assert!(close(m.sigma_s, ms(1.0)) && parts.combined == SigmaCombination::Larger);
         // Windows scattering ±4 ms about the offset with σ 2 ms: theirs grows by the Birge ratio
         // √(χ²/dof) = √(4·4/3) before the pooling.
@@ -772,6 +1021,7 @@ mod tests {
             &mut m,
             &fit(ClockShape::Constant, vec![0.1], vec![ms(0.3)]),
             &scattered,
+            0.0,
         );
         let windows_s = ms(1.0) * (16.0f64 / 3.0).sqrt();
         let expected = ((ms(0.3).powi(2) + windows_s * windows_s) / 2.0).sqrt();
@@ -796,8 +1046,13 @@ mod tests {
         let shape = ClockShape::Piecewise {
             changes: vec![60.0],
         };
-        let parts = set_parameters(&mut m, &fit(shape, vec![0.1, 0.2], vec![3e-4, 3e-4]), &p)
-            .expect("the headline segment's parts");
+        let parts = set_parameters(
+            &mut m,
+            &fit(shape, vec![0.1, 0.2], vec![3e-4, 3e-4]),
+            &p,
+            0.0,
+        )
+        .expect("the headline segment's parts");
         // Three windows of 2 ms: 2/√3 ms, pooled with the jackknife's 0.3 ms.
         let three_s = 0.002 / 3f64.sqrt();
         let pooled_s = ((3e-4f64.powi(2) + three_s * three_s) / 2.0).sqrt();
@@ -826,11 +1081,11 @@ mod tests {
         let pooled_s = 13f64.sqrt() * 1e-3;
         // 15 ppm measured with σ 10 ppm: what a constant clock shows by chance; σ stays the pooled.
         let mut m = constant(15.0);
-        set_parameters(&mut m, &fitted, &p);
+        set_parameters(&mut m, &fitted, &p, 0.0);
         assert!(close(m.sigma_s, pooled_s), "{m:?}");
         // 30 ppm, 3σ: the part beyond its noise, √(30² − 10²) ppm, over the windows' spread.
         let mut m = constant(-30.0);
-        set_parameters(&mut m, &fitted, &p);
+        set_parameters(&mut m, &fitted, &p, 0.0);
         let hidden_s = 800f64.sqrt() * 1e-6 * spread_s;
         assert!(
             close(m.sigma_s, (pooled_s.powi(2) + hidden_s * hidden_s).sqrt()),
@@ -855,6 +1110,7 @@ mod tests {
             &mut m,
             &fit(shape.clone(), vec![0.1, -48e-6], vec![2e-4, 1e-6]),
             &p,
+            0.0,
         );
         assert!(close(m.drift_ppm.unwrap(), 48.0));
         assert!(close(m.drift_sigma_ppm.unwrap(), 3.0));
@@ -865,7 +1121,55 @@ mod tests {
             &mut m,
             &fit(shape, vec![0.1, -48e-6], vec![0.004, 5e-6]),
             &p,
+            0.0,
         );
         assert!(close(m.drift_sigma_ppm.unwrap(), 5.0) && close(m.sigma_s, 0.004));
+    }
+
+    #[test]
+    fn fits_along_the_valley_the_windows_cannot_tell_apart_widen_sigma() {
+        let at = |theta: f64| fit(ClockShape::Constant, vec![theta], vec![1e-3]);
+        // Twenty windows' residuals per point (mm²) of the reported fit, a wobble of ±0.1 about 1.
+        let reported: Vec<Option<f64>> = (0..20)
+            .map(|i| Some(1.0 + 0.1 * (i as f64 * 1.7).sin()))
+            .collect();
+        let shifted = |d: f64, wobble: f64| -> Vec<Option<f64>> {
+            reported
+                .iter()
+                .enumerate()
+                .map(|(i, r)| r.map(|r| r + d + wobble * (i as f64 * 2.3).cos()))
+                .collect()
+        };
+        let lead = Lead {
+            fits: vec![
+                // 0.43 s away, as good within the windows' scatter: undecided.
+                (at(0.43), shifted(0.005, 0.1)),
+                // 0.9 s away, worse in every window: decided.
+                (at(0.9), shifted(0.2, 0.01)),
+                // The reported fit's own basin.
+                (at(0.05), shifted(-0.001, 0.1)),
+            ],
+        };
+        assert!(close(lead.valley_s(&at(0.0), &reported), 0.215));
+        // Without the undecided one, nothing widens σ.
+        let decided = Lead {
+            fits: lead.fits[1..].to_vec(),
+        };
+        assert_eq!(decided.valley_s(&at(0.0), &reported), 0.0);
+        // The far fit is the best one on the mean, unless it is the near fit's basin.
+        assert_eq!(lead.far(Some(&at(0.5))).map(|f| f.theta[0]), Some(0.05));
+        assert!(lead.far(Some(&at(0.1))).is_none());
+        // valley_s enters the constant's σ in quadrature and its parts.
+        let p = profile(|_| 0.1);
+        let mut m = ClockModel::constant(0.0, 0.0, String::new());
+        let parts = set_parameters(
+            &mut m,
+            &fit(ClockShape::Constant, vec![0.1], vec![2e-3]),
+            &p,
+            0.215,
+        )
+        .unwrap();
+        assert!(m.sigma_s > 0.215 && m.sigma_s < 0.2151, "{m:?}");
+        assert_eq!(parts.valley_s, 0.215);
     }
 }

@@ -108,8 +108,26 @@ pub fn coarse_start(
     data: &PoseData<'_>,
     windows: &[Window],
     start_s: f64,
-    (span_s, step_s): (f64, f64),
+    span_step_s: (f64, f64),
 ) -> Option<f64> {
+    coarse_minima(data, windows, start_s, span_step_s, 1)
+        .first()
+        .map(|m| m.0)
+}
+
+/// The `count` best local minima of [`coarse_start`]'s residual per point over its candidates
+/// (offset, residual per point, the lever settled there), best first (a candidate at the search's
+/// edge counts when it is below its one neighbour). Along a
+/// valley where Δt trades against the lever, a gait ripples the residual with its period, and a
+/// grid coarser than the ripple can sample the truth's ripple above another's: several minima are
+/// fitted, not one.
+pub fn coarse_minima(
+    data: &PoseData<'_>,
+    windows: &[Window],
+    start_s: f64,
+    (span_s, step_s): (f64, f64),
+    count: usize,
+) -> Vec<(f64, f64, Vector3<f64>)> {
     let problem = data.problem();
     let shape = ClockShape::Constant;
     let fit = SharedFit {
@@ -121,8 +139,8 @@ pub fn coarse_start(
         p: 4,
     };
     let k = (span_s / step_s).round() as i64;
-    (-k..=k)
-        .filter_map(|i| {
+    let scan: Vec<(f64, f64, Vector3<f64>)> = (-k..=k)
+        .map(|i| {
             let theta = [start_s + i as f64 * step_s];
             let mut lever = Vector3::zeros();
             let mut terms = fit.eval(&theta, &lever, 1.0);
@@ -144,10 +162,47 @@ pub fn coarse_start(
                 }
             }
             let (rss, n) = residual_sums(&terms);
-            (n > 0).then(|| (theta[0], rss / n as f64))
+            let cost = if n > 0 { rss / n as f64 } else { f64::NAN };
+            (theta[0], cost, lever)
         })
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|best| best.0)
+        .collect::<Vec<_>>();
+    let cost = |i: usize| scan.get(i).map_or(f64::INFINITY, |c| c.1);
+    let mut minima: Vec<(f64, f64, Vector3<f64>)> = (0..scan.len())
+        .filter(|&i| {
+            let c = cost(i);
+            c.is_finite() && c <= cost(i.wrapping_sub(1)) && c <= cost(i + 1)
+        })
+        .map(|i| scan[i])
+        .collect();
+    minima.sort_by(|a, b| a.1.total_cmp(&b.1));
+    minima.truncate(count);
+    minima
+}
+
+/// Each window's residual per point under the constant clock `fit` (its Δt, lever and scale),
+/// squared metres; `None` for a window without points. Two fits of one mission are told apart on
+/// these: their mean, and their differences window by window, which are
+/// independent where the fits' shared residuals (the gait, a wandering bias) are not.
+pub fn window_residuals(
+    data: &PoseData<'_>,
+    windows: &[Window],
+    fit: &PoseFit,
+) -> Vec<Option<f64>> {
+    let problem = data.problem();
+    let shape = ClockShape::Constant;
+    let shared = SharedFit {
+        problem: &problem,
+        windows,
+        shape: &shape,
+        with_lever: true,
+        m: 1,
+        p: 4,
+    };
+    shared
+        .eval(&fit.theta, &fit.lever_m, fit.scale)
+        .into_iter()
+        .map(|t| t.filter(|t| t.n > 0).map(|t| t.rss / t.n as f64))
+        .collect()
 }
 
 /// Gauss–Newton with backtracking over the shared parameters, then the jackknife.
