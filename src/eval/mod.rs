@@ -513,7 +513,8 @@ fn accepted_offset(
 /// The pose fit from another confident search's answer, when it could not be made from the one
 /// applied (`o`) and that one lies beyond the fit's reach ([`MAX_DISAGREEMENT_S`]): two searches
 /// that disagree by seconds are a lever read as a lead by one of them, or a speed profile matched
-/// at a wrong lag, and the positions tell which only from a start near the truth. Accepted only
+/// at a wrong lag, and the positions tell which only from a start near the truth (or within the
+/// lead search's reach). Accepted only
 /// when the fit converged with its lever (its σ has its parts); the note says where it started.
 ///
 /// [`MAX_DISAGREEMENT_S`]: crate::align::pose_model::MAX_DISAGREEMENT_S
@@ -529,10 +530,7 @@ fn pose_from_another_answer(
     t0_ns: i64,
 ) -> Option<(TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport)> {
     use crate::align::pose_model::MAX_DISAGREEMENT_S;
-    methods
-        .iter()
-        .filter(|m| m.status == MethodStatus::Ok && m.method != o.method)
-        .filter_map(|m| Some((m.method, m.offset_s?)))
+    confident_answers(methods, o.method)
         .filter(|(_, offset_s)| (offset_s - o.offset_s).abs() > MAX_DISAGREEMENT_S)
         .find_map(|(method, offset_s)| {
             let start = OffsetEstimate {
@@ -553,12 +551,23 @@ fn pose_from_another_answer(
             )?;
             report.sigma_parts.is_some().then(|| {
                 let note = format!(
-                    "the pose fit did not converge from {}'s answer and started from {}'s ({:+.3} s): {note}",
+                    "the pose fit could not be made from {}'s answer and started from {}'s ({:+.3} s): {note}",
                     o.method, method, offset_s
                 );
                 (report, w, note, entry)
             })
         })
+}
+
+/// The answers of the confident searches in `methods` other than `except`: (method, Δt).
+fn confident_answers(
+    methods: &[OffsetMethodReport],
+    except: OffsetMethod,
+) -> impl Iterator<Item = (OffsetMethod, f64)> + '_ {
+    methods
+        .iter()
+        .filter(move |m| m.status == MethodStatus::Ok && m.method != except)
+        .filter_map(|m| Some((m.method, m.offset_s?)))
 }
 
 /// No confident peak: nothing applied (0 s), the best answer reported, a warning saying what to do.
@@ -726,10 +735,8 @@ fn pose_over_time(
 ) -> Option<(TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport)> {
     use crate::align::pose_model::pose_clock_model;
     // The other confident searches' answers: the lead search scans about them too.
-    let other_answers_s: Vec<f64> = methods
-        .iter()
-        .filter(|m| m.status == MethodStatus::Ok && m.method != o.method)
-        .filter_map(|m| m.offset_s)
+    let other_answers_s: Vec<f64> = confident_answers(methods, o.method)
+        .map(|(_, offset_s)| offset_s)
         .collect();
     let gap_s = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
     let jumps = crate::align::jumps::jumps(pair.estimate.0, pair.estimate.1, gap_s);

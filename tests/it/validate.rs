@@ -445,7 +445,7 @@ fn validate_like_takes_its_shape_from_text_trajectories_too() {
     assert!(table.contains("| 2 | 2 |"), "{table}");
 }
 
-/// A legged robot walking at one speed without stopping or turning in place, its estimate's sensor
+/// A legged robot that stands 15 s, then walks at one speed without turning in place, its estimate's sensor
 /// 0.3 m ahead of the reference's point: the signal searches read that lever as a clock offset of
 /// 1 s (0.3 m at 0.3 m/s), beyond the pose fit's usual reach from their answer. The lead search
 /// (`align::pose_model`) finds the offset along the valley where Δt trades against the lever.

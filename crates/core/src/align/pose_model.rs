@@ -45,7 +45,7 @@
 //! residuals: the windows are independent where the points are not), the data cannot tell the
 //! two apart, and the constant's σ adds half their distance in quadrature
 //! (`sigma_parts.valley_s`). Measured on a second simulator's missions (docs/evidence.md, "A
-//! second simulator").
+//! second simulator, and the lead search").
 //!
 //! A constant clock whose drift the data cannot resolve could still hide one below the resolution:
 //! when the profile's line measures a drift d beyond [`HIDDEN_DRIFT_Z`] of its σ_d (a drift the data
@@ -72,7 +72,8 @@ use crate::align::time_offset::OffsetMethod;
 /// Δt; this only keeps a degenerate window from claiming infinite precision).
 pub const POSE_SIGMA_FLOOR_S: f64 = 1e-4;
 /// The pose fit's Δt may differ from the signal search's by this much at most, seconds: farther, the
-/// fit went to another basin and is not used.
+/// fit went to another basin and is not used (only the lead search looks farther, and judges the
+/// basins it finds on every window).
 pub const MAX_DISAGREEMENT_S: f64 = 0.3;
 /// The largest lever between the two sensors the lead search allows for, metres.
 pub const LEAD_LEVER_M: f64 = 0.5;
@@ -86,16 +87,15 @@ pub const LEAD_MINIMA: usize = 3;
 /// least this many of their standard errors (a t statistic); nearer, σ covers both (see the module
 /// doc).
 pub const LEAD_SIGNIFICANCE_T: f64 = 2.0;
+/// Other confident searches' answers farther than this from the applied one are not scanned
+/// about, seconds (twice the largest lead: a search that far off found something else).
+pub const MAX_ANSWER_SPREAD_S: f64 = 2.0 * MAX_LEAD_S;
 /// The lead search's scan looks at this many windows at most (evenly spread).
 pub const LEAD_SCAN_WINDOWS: usize = 60;
 /// The lead search runs where the lead can exceed this many times [`MAX_DISAGREEMENT_S`] (below
 /// 0.83 m/s: walking robots; a vehicle's speed search, immune to a forward lever, starts the fit
 /// near enough, and the search would cost a long mission's evaluation a fifth more).
 pub const LEAD_REACH: f64 = 2.0;
-/// The span of the reference's speed for the lead, seconds.
-const SPEED_SPAN_S: f64 = 1.0;
-/// Below this median speed the lead search does not run (a robot standing), m/s.
-const MIN_WALKING_SPEED_MPS: f64 = 0.05;
 /// The step of the coarse search for a start when the fit from the signal search's answer does not
 /// converge, seconds (the fit converged from 34–100 ms off where it stalled from 64–218 ms).
 pub const COARSE_STEP_S: f64 = 0.025;
@@ -204,17 +204,20 @@ pub fn pose_clock_model(
     let mut chosen = mission.choose(start_s)?;
     // The lead search, only where the windows chose one constant clock: across a clock step the
     // constant trades its lever for Δt as well, and the other segment's basin fits better.
-    let lead = (chosen.model.model == OffsetModel::Constant
-        && matches!(forced, None | Some(OffsetModel::Constant)))
-    .then(|| {
-        let answers: Vec<f64> = std::iter::once(start_s)
-            .chain(other_answers_s.iter().copied())
-            .filter(|a| (a - start_s).abs() <= 2.0 * MAX_LEAD_S)
-            .collect();
-        lead_search(&data, &mission.windows, &answers, mission.whole.as_ref())
-    })
-    .flatten();
-    if let Some(far) = lead.as_ref().and_then(|l| l.far(mission.whole.as_ref())) {
+    // A drift the final fit leaves below the resolution (`drift_resolved`) becomes a constant after
+    // this: the windows chose a drift there, and the search is not run.
+    // The near fit: the whole mission's, or without one the chosen constant's.
+    let near = mission.whole.clone().or_else(|| chosen.fit.clone());
+    let lead = (chosen.model.model == OffsetModel::Constant)
+        .then(|| {
+            let answers: Vec<f64> = std::iter::once(start_s)
+                .chain(other_answers_s.iter().copied())
+                .filter(|a| a.is_finite() && (a - start_s).abs() <= MAX_ANSWER_SPREAD_S)
+                .collect();
+            lead_search(&data, &mission.windows, &answers, near.as_ref())
+        })
+        .flatten();
+    if let Some(far) = lead.as_ref().and_then(|l| l.far(near.as_ref())) {
         let other = Mission {
             whole: Some(far),
             windows: mission.windows.clone(),
@@ -235,10 +238,7 @@ pub fn pose_clock_model(
     let (profile, mut model) = (chosen.profile, chosen.model);
     let last = mission.drift_resolved(&mut model, last);
     let valley_s = match (&lead, model.model) {
-        (Some(lead), OffsetModel::Constant) => lead.valley_s(
-            &last,
-            &pose_fit::window_residuals(&data, &mission.windows, &last),
-        ),
+        (Some(lead), OffsetModel::Constant) => lead.valley_s(&data, &last),
         _ => 0.0,
     };
     let sigma_parts = set_parameters(&mut model, &last, &profile, valley_s);
@@ -289,14 +289,33 @@ fn whole_mission_fit(
 }
 
 /// What the lead search found: the fits along the forward lever's valley (the near one among
-/// them), each with its residual per point in every window.
+/// them), each with its residual per point in every window of `windows` (the mission's, less
+/// those any of the fits left out as jumps).
 struct Lead {
+    windows: Vec<pose_fit::Window>,
     fits: Vec<(PoseFit, Vec<Option<f64>>)>,
 }
 
 impl Lead {
-    /// The fit with the least residual per point over every window, when it is not the near one.
+    /// The fit with the least mean residual per point over the windows every fit has points in,
+    /// when it is not in `near`'s basin.
     fn far(&self, near: Option<&PoseFit>) -> Option<PoseFit> {
+        let shared: Vec<bool> = (0..self.windows.len())
+            .map(|k| self.fits.iter().all(|(_, r)| r[k].is_some()))
+            .collect();
+        let mean = |r: &[Option<f64>]| {
+            let (sum, n) = r
+                .iter()
+                .zip(&shared)
+                .filter_map(|(x, s)| x.filter(|_| *s))
+                .fold((0.0, 0usize), |(a, n), x| (a + x, n + 1));
+            let m = sum / n as f64;
+            if m.is_finite() {
+                m
+            } else {
+                f64::INFINITY
+            }
+        };
         let best = self
             .fits
             .iter()
@@ -304,14 +323,15 @@ impl Lead {
         (!near.is_some_and(|n| same_basin(n, &best.0))).then(|| best.0.clone())
     }
 
-    /// Half the largest distance from `reported`'s Δt (residuals per window `residuals`) to a fit
-    /// the windows do not find worse beyond [`LEAD_SIGNIFICANCE_T`], seconds: how far along the
-    /// valley the data leave Δt undecided (0 when every other fit is worse).
-    fn valley_s(&self, reported: &PoseFit, residuals: &[Option<f64>]) -> f64 {
+    /// Half the largest distance from `reported`'s Δt to a fit the windows do not find worse beyond
+    /// [`LEAD_SIGNIFICANCE_T`], seconds: how far along the valley the data leave Δt undecided (0
+    /// when every other fit is worse).
+    fn valley_s(&self, data: &PoseData<'_>, reported: &PoseFit) -> f64 {
+        let residuals = pose_fit::window_residuals(data, &self.windows, reported);
         self.fits
             .iter()
             .filter(|(f, r)| {
-                !same_basin(f, reported) && paired_t(r, residuals) < LEAD_SIGNIFICANCE_T
+                !same_basin(f, reported) && paired_t(r, &residuals) < LEAD_SIGNIFICANCE_T
             })
             .map(|(f, _)| (f.theta[0] - reported.theta[0]).abs() / 2.0)
             .fold(0.0, f64::max)
@@ -321,19 +341,6 @@ impl Lead {
 /// Two constant fits in one basin: their Δt within a step of the lead search.
 fn same_basin(a: &PoseFit, b: &PoseFit) -> bool {
     (a.theta[0] - b.theta[0]).abs() <= LEAD_STEP_S
-}
-
-/// The mean of the windows' residuals per point that are there.
-fn mean(r: &[Option<f64>]) -> f64 {
-    let (sum, n) = r
-        .iter()
-        .flatten()
-        .fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
-    if n == 0 {
-        f64::INFINITY
-    } else {
-        sum / n as f64
-    }
 }
 
 /// The lead search (see the module doc): constant fits from the best minima of a scan of Δt over
@@ -353,7 +360,9 @@ fn lead_search(
     // long missions: the scan only finds basins), the fits from its best minima compete with the
     // near one on their residual over every window (the scan's own ranking is not trusted: its
     // grid samples the gait's ripples unevenly).
-    let speed_mps = walking_speed_mps(data)?;
+    // The reference's mean speed while it moves (a robot that stands half the mission still walks).
+    let (speed_mps, _) =
+        crate::align::auto_params::moving_speed(data.ref_t, data.ref_p, data.params.max_gap_s)?;
     let lead_s = LEAD_LEVER_M / speed_mps;
     if lead_s <= LEAD_REACH * MAX_DISAGREEMENT_S {
         return None;
@@ -361,19 +370,22 @@ fn lead_search(
     let lead_s = lead_s.min(MAX_LEAD_S);
     // Over the lead about every answer: a speed search can match a smooth speed at a wrong lag
     // with confidence, and the curvature searches' answer then lies the lead from the truth.
-    let (lo, hi) = answers_s
+    let (lo_s, hi_s) = answers_s
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), a| {
             (lo.min(*a), hi.max(*a))
         });
-    let (lo, hi) = (lo - lead_s, hi + lead_s);
+    if !(lo_s.is_finite() && hi_s.is_finite()) {
+        return None;
+    }
+    let (lo_s, hi_s) = (lo_s - lead_s, hi_s + lead_s);
     let stride = windows.len().div_ceil(LEAD_SCAN_WINDOWS).max(1);
     let sample: Vec<pose_fit::Window> = windows.iter().step_by(stride).cloned().collect();
     let minima = pose_fit::coarse_minima(
         data,
         &sample,
-        (lo + hi) / 2.0,
-        ((hi - lo) / 2.0, LEAD_STEP_S),
+        (lo_s + hi_s) / 2.0,
+        ((hi_s - lo_s) / 2.0, LEAD_STEP_S),
         LEAD_MINIMA + 1,
     );
     // The fit from each minimum, its lever the scan's there, or none when that does not converge
@@ -389,8 +401,8 @@ fn lead_search(
         )
         .filter(|f| {
             f.converged
-                && f.theta[0] >= lo - MAX_DISAGREEMENT_S
-                && f.theta[0] <= hi + MAX_DISAGREEMENT_S
+                && f.theta[0] >= lo_s - MAX_DISAGREEMENT_S
+                && f.theta[0] <= hi_s + MAX_DISAGREEMENT_S
         })
     };
     let far = minima
@@ -400,17 +412,33 @@ fn lead_search(
         .filter_map(|(theta, _, lever)| {
             fit_from(theta, lever).or_else(|| fit_from(theta, Vector3::zeros()))
         });
-    let fits = far
-        .chain(near.cloned())
+    let fits: Vec<PoseFit> = far.chain(near.cloned()).collect();
+    // Windows a fit left out (a jump of the estimate) would weigh on every comparison.
+    let kept: Vec<pose_fit::Window> = windows
+        .iter()
+        .filter(|w| {
+            !fits
+                .iter()
+                .any(|f| f.outliers.iter().any(|o| o.t_start == w.t_start))
+        })
+        .cloned()
+        .collect();
+    let fits = fits
+        .into_iter()
         .map(|f| {
-            let r = pose_fit::window_residuals(data, windows, &f);
+            let r = pose_fit::window_residuals(data, &kept, &f);
             (f, r)
         })
         .collect();
-    Some(Lead { fits })
+    Some(Lead {
+        windows: kept,
+        fits,
+    })
 }
 
-/// The paired t statistic of `a` − `b` over the windows both have (negative: `a` fits better).
+/// The paired t statistic of `a` − `b` over the windows both have (negative: `a` fits better):
+/// ±∞ when they differ by the same amount in every window, 0 (undecided) over fewer than two
+/// windows, NaN (decided: not below any bound) when a residual is not finite.
 fn paired_t(a: &[Option<f64>], b: &[Option<f64>]) -> f64 {
     let d: Vec<f64> = a
         .iter()
@@ -423,34 +451,13 @@ fn paired_t(a: &[Option<f64>], b: &[Option<f64>]) -> f64 {
     }
     let mean = d.iter().sum::<f64>() / k;
     let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (k - 1.0);
-    if var > 0.0 {
+    if var > 0.0 || !mean.is_finite() {
         mean / (var / k).sqrt()
-    } else {
+    } else if mean == 0.0 {
         0.0
+    } else {
+        f64::INFINITY.copysign(mean)
     }
-}
-
-/// The median speed of the reference over spans of at least [`SPEED_SPAN_S`] (long enough that
-/// its noise does not read as motion), metres per second; `None` when it hardly moves.
-fn walking_speed_mps(data: &PoseData<'_>) -> Option<f64> {
-    let (t, p) = (data.ref_t, data.ref_p);
-    let mut speeds = Vec::new();
-    let mut i = 0;
-    for j in 1..t.len() {
-        let dt = t[j] - t[i];
-        if dt >= SPEED_SPAN_S {
-            if dt <= 2.0 * SPEED_SPAN_S {
-                speeds.push((p[j] - p[i]).norm() / dt);
-            }
-            i = j;
-        }
-    }
-    if speeds.is_empty() {
-        return None;
-    }
-    let mid = speeds.len() / 2;
-    let (_, m, _) = speeds.select_nth_unstable_by(mid, f64::total_cmp);
-    (*m > MIN_WALKING_SPEED_MPS).then_some(*m)
 }
 
 /// One mission's pose fits: the data, the windows of the fits and of the profile, the whole
@@ -685,8 +692,9 @@ impl Mission<'_, '_> {
 /// jackknife with what the profile's windows give for it (their calibrated σ combined and raised by
 /// their scatter): the mean of the two variances, at least the formal σ. The line's σ are the
 /// fit's, at least the windows' (see the module doc). The constant's σ also adds a drift the
-/// profile measures beyond [`HIDDEN_DRIFT_Z`] of its σ; the piecewise model's headline is its
-/// longest segment's. Returns what the headline σ was made of.
+/// profile measures beyond [`HIDDEN_DRIFT_Z`] of its σ, and `valley_s` (the lead search's: half
+/// the distance to a fit the windows cannot tell from it), both in quadrature; the piecewise
+/// model's headline is its longest segment's. Returns what the headline σ was made of.
 fn set_parameters(
     model: &mut ClockModel,
     last: &PoseFit,
@@ -1129,34 +1137,46 @@ mod tests {
     #[test]
     fn fits_along_the_valley_the_windows_cannot_tell_apart_widen_sigma() {
         let at = |theta: f64| fit(ClockShape::Constant, vec![theta], vec![1e-3]);
-        // Twenty windows' residuals per point (mm²) of the reported fit, a wobble of ±0.1 about 1.
-        let reported: Vec<Option<f64>> = (0..20)
+        // Twenty windows' residuals per point (mm²) of one fit, a wobble of ±0.1 about 1.
+        let base: Vec<Option<f64>> = (0..20)
             .map(|i| Some(1.0 + 0.1 * (i as f64 * 1.7).sin()))
             .collect();
         let shifted = |d: f64, wobble: f64| -> Vec<Option<f64>> {
-            reported
-                .iter()
+            base.iter()
                 .enumerate()
                 .map(|(i, r)| r.map(|r| r + d + wobble * (i as f64 * 2.3).cos()))
                 .collect()
         };
+        // As good within the windows' scatter: undecided; worse in every window: decided.
+        assert!(paired_t(&shifted(0.005, 0.1), &base).abs() < LEAD_SIGNIFICANCE_T);
+        assert!(paired_t(&shifted(0.2, 0.01), &base) > 10.0);
+        // The same excess in every window is decided, identical residuals are not, and a residual
+        // that is not finite decides nothing below a bound.
+        assert!(paired_t(&shifted(0.2, 0.0), &base) > 1e6);
+        assert_eq!(paired_t(&base, &base), 0.0);
+        let mut broken = base.clone();
+        broken[3] = Some(f64::NAN);
+        assert!(paired_t(&broken, &base).is_nan());
+        // The far fit is the best on the windows every fit has, unless it is in the near basin.
         let lead = Lead {
+            windows: Vec::new(),
             fits: vec![
-                // 0.43 s away, as good within the windows' scatter: undecided.
                 (at(0.43), shifted(0.005, 0.1)),
-                // 0.9 s away, worse in every window: decided.
                 (at(0.9), shifted(0.2, 0.01)),
-                // The reported fit's own basin.
                 (at(0.05), shifted(-0.001, 0.1)),
             ],
         };
-        assert!(close(lead.valley_s(&at(0.0), &reported), 0.215));
-        // Without the undecided one, nothing widens σ.
-        let decided = Lead {
-            fits: lead.fits[1..].to_vec(),
+        let lead = Lead {
+            windows: vec![
+                pose_fit::Window {
+                    range: 0..0,
+                    t_start: 0.0,
+                    t_end: 1.0
+                };
+                20
+            ],
+            ..lead
         };
-        assert_eq!(decided.valley_s(&at(0.0), &reported), 0.0);
-        // The far fit is the best one on the mean, unless it is the near fit's basin.
         assert_eq!(lead.far(Some(&at(0.5))).map(|f| f.theta[0]), Some(0.05));
         assert!(lead.far(Some(&at(0.1))).is_none());
         // valley_s enters the constant's σ in quadrature and its parts.

@@ -117,7 +117,7 @@ pub fn coarse_start(
 
 /// The `count` best local minima of [`coarse_start`]'s residual per point over its candidates
 /// (offset, residual per point, the lever settled there), best first (a candidate at the search's
-/// edge counts when it is below its one neighbour). Along a
+/// edge counts when it is not above its one neighbour; a candidate without points costs ∞). Along a
 /// valley where Δt trades against the lever, a gait ripples the residual with its period, and a
 /// grid coarser than the ripple can sample the truth's ripple above another's: several minima are
 /// fitted, not one.
@@ -162,7 +162,7 @@ pub fn coarse_minima(
                 }
             }
             let (rss, n) = residual_sums(&terms);
-            let cost = if n > 0 { rss / n as f64 } else { f64::NAN };
+            let cost = if n > 0 { rss / n as f64 } else { f64::INFINITY };
             (theta[0], cost, lever)
         })
         .collect::<Vec<_>>();
