@@ -479,9 +479,10 @@ fn accepted_offset(
     } = searched;
     let posed = match est.trajectory.orientations.as_deref() {
         Some(q) if config.pose_fit() => {
-            pose_over_time(config, params, pair, q, o, &methods, &est.name, t0_ns).or_else(|| {
-                pose_from_another_answer(config, params, pair, q, o, &methods, est, t0_ns)
-            })
+            let pose_from = |start: &OffsetEstimate| {
+                pose_over_time(config, params, pair, q, start, &methods, &est.name, t0_ns)
+            };
+            pose_from(o).or_else(|| pose_from_another_answer(o, &methods, pose_from))
         }
         _ => None,
     };
@@ -514,21 +515,15 @@ fn accepted_offset(
 /// applied (`o`) and that one lies beyond the fit's reach ([`MAX_DISAGREEMENT_S`]): two searches
 /// that disagree by seconds are a lever read as a lead by one of them, or a speed profile matched
 /// at a wrong lag, and the positions tell which only from a start near the truth (or within the
-/// lead search's reach). Accepted only
-/// when the fit converged with its lever (its σ has its parts); the note says where it started.
+/// lead search's reach). `pose_from` makes the pose fit from a start; its answer is accepted only
+/// when the fit converged with its lever (its σ has its parts), the note saying where it started.
 ///
 /// [`MAX_DISAGREEMENT_S`]: crate::align::pose_model::MAX_DISAGREEMENT_S
-#[allow(clippy::too_many_arguments)]
 fn pose_from_another_answer(
-    config: &EvalConfig,
-    params: &crate::align::time_offset::OffsetParams,
-    pair: &Pair<'_>,
-    orientations: &[nalgebra::UnitQuaternion<f64>],
     o: &OffsetEstimate,
     methods: &[OffsetMethodReport],
-    est: &Loaded,
-    t0_ns: i64,
-) -> Option<(TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport)> {
+    pose_from: impl Fn(&OffsetEstimate) -> Option<Posed>,
+) -> Option<Posed> {
     use crate::align::pose_model::MAX_DISAGREEMENT_S;
     confident_answers(methods, o.method)
         .filter(|(_, offset_s)| (offset_s - o.offset_s).abs() > MAX_DISAGREEMENT_S)
@@ -538,17 +533,7 @@ fn pose_from_another_answer(
                 offset_s,
                 ..*o
             };
-            let (report, w, note, entry) =
-                pose_over_time(
-                config,
-                params,
-                pair,
-                orientations,
-                &start,
-                methods,
-                &est.name,
-                t0_ns,
-            )?;
+            let (report, w, note, entry) = pose_from(&start)?;
             report.sigma_parts.is_some().then(|| {
                 let note = format!(
                     "the pose fit could not be made from {}'s answer and started from {}'s ({:+.3} s): {note}",
@@ -558,6 +543,10 @@ fn pose_from_another_answer(
             })
         })
 }
+
+/// What the pose fit gives the report: its fields, the warnings of a non-constant model, the note
+/// for the reason, and the `pose` entry of `methods`.
+type Posed = (TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport);
 
 /// The answers of the confident searches in `methods` other than `except`: (method, Δt).
 fn confident_answers(
@@ -732,7 +721,7 @@ fn pose_over_time(
     methods: &[OffsetMethodReport],
     name: &str,
     t0_ns: i64,
-) -> Option<(TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport)> {
+) -> Option<Posed> {
     use crate::align::pose_model::pose_clock_model;
     // The other confident searches' answers: the lead search scans about them too.
     let other_answers_s: Vec<f64> = confident_answers(methods, o.method)

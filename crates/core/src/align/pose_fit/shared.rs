@@ -129,15 +129,7 @@ pub fn coarse_minima(
     count: usize,
 ) -> Vec<(f64, f64, Vector3<f64>)> {
     let problem = data.problem();
-    let shape = ClockShape::Constant;
-    let fit = SharedFit {
-        problem: &problem,
-        windows,
-        shape: &shape,
-        with_lever: true,
-        m: 1,
-        p: 4,
-    };
+    let fit = SharedFit::new(&problem, windows, &ClockShape::Constant, true);
     let k = (span_s / step_s).round() as i64;
     let scan: Vec<(f64, f64, Vector3<f64>)> = (-k..=k)
         .map(|i| {
@@ -189,15 +181,7 @@ pub fn window_residuals(
     fit: &PoseFit,
 ) -> Vec<Option<f64>> {
     let problem = data.problem();
-    let shape = ClockShape::Constant;
-    let shared = SharedFit {
-        problem: &problem,
-        windows,
-        shape: &shape,
-        with_lever: true,
-        m: 1,
-        p: 4,
-    };
+    let shared = SharedFit::new(&problem, windows, &ClockShape::Constant, true);
     shared
         .eval(&fit.theta, &fit.lever_m, fit.scale)
         .into_iter()
@@ -214,15 +198,7 @@ pub(super) fn solve(
     lever0: Vector3<f64>,
     with_lever: bool,
 ) -> Option<PoseFit> {
-    let m = shape.len();
-    let fit = SharedFit {
-        problem,
-        windows,
-        shape,
-        with_lever,
-        m,
-        p: m + if with_lever { 3 } else { 0 },
-    };
+    let fit = SharedFit::new(problem, windows, shape, with_lever);
     let mut x = fit.start(theta0, lever0)?;
     let iterations = fit.gauss_newton(&mut x)?;
     fit.finish(x, iterations)
@@ -237,6 +213,26 @@ pub(super) struct SharedFit<'a> {
     pub(super) with_lever: bool,
     pub(super) m: usize,
     pub(super) p: usize,
+}
+
+impl<'a> SharedFit<'a> {
+    /// The fit of `shape` over `windows`, with the lever when `with_lever`.
+    pub(super) fn new(
+        problem: &'a Problem<'a>,
+        windows: &'a [Window],
+        shape: &'a ClockShape,
+        with_lever: bool,
+    ) -> Self {
+        let m = shape.len();
+        SharedFit {
+            problem,
+            windows,
+            shape,
+            with_lever,
+            m,
+            p: m + if with_lever { 3 } else { 0 },
+        }
+    }
 }
 
 /// Gauss–Newton's iterate: the shared parameters, the windows' reduced equations at them, and what

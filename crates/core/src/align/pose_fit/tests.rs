@@ -185,14 +185,7 @@ fn the_sigma_of_the_offset_is_the_spread_of_its_answers() {
         let w = data.windows();
         let f = constant_from(&data, &w, 0.1);
         let problem = data.problem();
-        let shared = SharedFit {
-            problem: &problem,
-            windows: &f.windows,
-            shape: &ClockShape::Constant,
-            with_lever: true,
-            m: 1,
-            p: 4,
-        };
+        let shared = SharedFit::new(&problem, &f.windows, &ClockShape::Constant, true);
         let terms = shared.eval(&f.theta, &f.lever_m, f.scale);
         let l = lever_weight(&terms);
         let jac = shared.jacobians((&f.theta, &f.lever_m, f.scale), &terms, l, f.jacobian_scale);
