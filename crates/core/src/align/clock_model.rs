@@ -20,6 +20,13 @@
 //! made the profile ([`crate::align::pose_fit::locate_change`]), else on the signals
 //! ([`locate_change`]).
 //!
+//! **The signal searches' constant** (a clock model from the speed or curvature profile, not the
+//! pose fit) keeps the whole mission's answer, one correlation over every sample, with σ the
+//! larger of its own and the windows' mean's; where that answer lies beyond [`WHOLE_WINDOWS_Z`] σ
+//! of the windows' mean, σ adds the distance ([`whole_against_windows_s`]): a correlation over a
+//! whole mission with gaps can peak at a lag none of its stretches chooses (a 1 Hz ground reference
+//! with outages, its speed search 251 ms off under σ 75 ms, its windows' mean 40 ms off).
+//!
 //! Sign of the drift: `drift_ppm` is positive when the estimate's clock runs fast, so its Δt falls
 //! with time: Δt(t) = Δt(t_mid) − drift_ppm·10⁻⁶·(t − t_mid). The chosen model is applied to the
 //! estimate's stamps from the report's numbers by [`crate::clock`].
@@ -46,6 +53,9 @@ pub const MAX_STEPS: usize = 3;
 /// of the windows' median σ over the mission's span added to σ_drift, kept the same false alarms and
 /// called twice as many 5-minute missions drifting with the wrong rate.
 pub const SLOW_ERROR_FACTOR: f64 = 2.0;
+/// A constant's σ covers the distance from the whole mission's answer to its own windows' mean
+/// beyond this many of the mean's σ (see [`whole_against_windows_s`]).
+pub const WHOLE_WINDOWS_Z: f64 = 2.0;
 
 /// The clock model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -251,6 +261,42 @@ pub fn windows_inside(profile: &OffsetProfile, span: (f64, f64)) -> usize {
 pub fn windows_offset_s(profile: &OffsetProfile, span: (f64, f64)) -> Option<(f64, f64)> {
     let w = inside(&profile.usable(), span, 0.5 * profile.window_s);
     fit(&w, 0.0, false, profile.redundancy()).map(|c| (c.a, c.sigma_a * c.birge(w.len(), 1)))
+}
+
+/// How far the whole mission's answer `whole_s` lies from the weighted mean of `profile`'s usable
+/// windows beyond the mean's σ, seconds: √(d² − σ²) where the distance d exceeds
+/// [`WHOLE_WINDOWS_Z`]·σ, else 0. Both measure the one offset of a constant clock on the same data,
+/// the whole answer in one correlation, the mean window by window; where they disagree the
+/// correlation over the whole mission found a peak its own stretches do not (a smooth speed matched
+/// at a wrong lag across a reference with gaps), and a σ that leaves out the distance claims more
+/// than either knows. Added in quadrature to the signal searches' constant.
+///
+/// ```
+/// use trajdrift_core::align::clock_model::whole_against_windows_s;
+/// use trajdrift_core::align::offset_profile::{OffsetProfile, ProfileWindow};
+/// use trajdrift_core::align::time_offset::OffsetMethod;
+/// let window = |t: f64, offset_s: f64| ProfileWindow {
+///     t, offset_s, sigma_s: 0.002, correlation: 0.9, usable: true,
+/// };
+/// let profile = OffsetProfile {
+///     method: OffsetMethod::Curvature,
+///     window_s: 20.0,
+///     step_s: 20.0,
+///     sigma_scale: 1.0,
+///     windows: (0..4).map(|k| window(10.0 + 20.0 * k as f64, 0.1)).collect(),
+/// };
+/// // The windows' mean is 0.1 s with σ 1 ms (2 ms / √4).
+/// assert_eq!(whole_against_windows_s(0.1015, &profile), 0.0); // within 2σ
+/// let excess = whole_against_windows_s(0.105, &profile); // 5σ away
+/// assert!((excess - (0.005f64.powi(2) - 0.001f64.powi(2)).sqrt()).abs() < 1e-12);
+/// ```
+pub fn whole_against_windows_s(whole_s: f64, profile: &OffsetProfile) -> f64 {
+    match windows_offset_s(profile, (f64::NEG_INFINITY, f64::INFINITY)) {
+        Some((mean, sigma)) if (whole_s - mean).abs() > WHOLE_WINDOWS_Z * sigma => {
+            ((whole_s - mean).powi(2) - sigma * sigma).sqrt()
+        }
+        _ => 0.0,
+    }
 }
 
 /// The σ at `t_mid` of the line through `profile`'s usable windows (as
@@ -756,12 +802,23 @@ pub fn clock_model_of(
         .map_or(SIGMA_FLOOR_S, |s| s * p.sigma_scale)
         .max(SIGMA_FLOOR_S);
     let locate = |d: (f64, f64), span: (f64, f64)| locate_change((r, e), d, span);
-    let m = choose_model(
+    let mut m = choose_model(
         &p,
         (whole.offset_s, whole_sigma),
         Some(&locate),
         forced,
         Steps::Resolved,
     );
+    if m.model == OffsetModel::Constant {
+        let excess = whole_against_windows_s(m.offset_s, &p);
+        if excess > 0.0 {
+            m.sigma_s = m.sigma_s.hypot(excess);
+            m.criterion = format!(
+                "{}; σ widened by {:.4} s: the whole mission's answer lies that far from its windows' mean",
+                m.criterion, excess
+            );
+            m.describe();
+        }
+    }
     Ok((p, m))
 }
