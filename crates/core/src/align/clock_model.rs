@@ -814,7 +814,7 @@ pub fn clock_model_of(
         if excess > 0.0 {
             m.sigma_s = m.sigma_s.hypot(excess);
             m.criterion = format!(
-                "{}; σ widened by {:.4} s: the whole mission's answer lies that far from its windows' mean",
+                "{}; σ adds {:.4} s for the whole mission's answer's distance from its windows' mean",
                 m.criterion, excess
             );
             m.describe();
