@@ -407,10 +407,10 @@ fn lead_search(
     };
     let far = minima
         .into_iter()
-        .filter(|m| near.is_none_or(|n| (n.theta[0] - m.0).abs() > LEAD_STEP_S))
+        .filter(|m| near.is_none_or(|n| (n.theta[0] - m.offset_s).abs() > LEAD_STEP_S))
         .take(LEAD_MINIMA)
-        .filter_map(|(theta, _, lever)| {
-            fit_from(theta, lever).or_else(|| fit_from(theta, Vector3::zeros()))
+        .filter_map(|m| {
+            fit_from(m.offset_s, m.lever_m).or_else(|| fit_from(m.offset_s, Vector3::zeros()))
         });
     let fits: Vec<PoseFit> = far.chain(near.cloned()).collect();
     // Windows a fit left out (a jump of the estimate) would weigh on every comparison.

@@ -112,11 +112,22 @@ pub fn coarse_start(
 ) -> Option<f64> {
     coarse_minima(data, windows, start_s, span_step_s, 1)
         .first()
-        .map(|m| m.0)
+        .map(|m| m.offset_s)
+}
+
+/// A local minimum of [`coarse_minima`]'s scan.
+#[derive(Debug, Clone, Copy)]
+pub struct ScanMinimum {
+    /// The candidate Δt, seconds.
+    pub offset_s: f64,
+    /// The residual per point there (the lever solved), m².
+    pub cost_m2: f64,
+    /// The lever settled there (estimate body frame), metres.
+    pub lever_m: Vector3<f64>,
 }
 
 /// The `count` best local minima of [`coarse_start`]'s residual per point over its candidates
-/// (offset, residual per point, the lever settled there), best first (a candidate at the search's
+/// (see [`ScanMinimum`]), best first (a candidate at the search's
 /// edge counts when it is not above its one neighbour; a candidate without points costs ∞). Along a
 /// valley where Δt trades against the lever, a gait ripples the residual with its period, and a
 /// grid coarser than the ripple can sample the truth's ripple above another's: several minima are
@@ -127,11 +138,11 @@ pub fn coarse_minima(
     start_s: f64,
     (span_s, step_s): (f64, f64),
     count: usize,
-) -> Vec<(f64, f64, Vector3<f64>)> {
+) -> Vec<ScanMinimum> {
     let problem = data.problem();
     let fit = SharedFit::new(&problem, windows, &ClockShape::Constant, true);
     let k = (span_s / step_s).round() as i64;
-    let scan: Vec<(f64, f64, Vector3<f64>)> = (-k..=k)
+    let scan: Vec<ScanMinimum> = (-k..=k)
         .map(|i| {
             let theta = [start_s + i as f64 * step_s];
             let mut lever = Vector3::zeros();
@@ -154,19 +165,22 @@ pub fn coarse_minima(
                 }
             }
             let (rss, n) = residual_sums(&terms);
-            let cost = if n > 0 { rss / n as f64 } else { f64::INFINITY };
-            (theta[0], cost, lever)
+            ScanMinimum {
+                offset_s: theta[0],
+                cost_m2: if n > 0 { rss / n as f64 } else { f64::INFINITY },
+                lever_m: lever,
+            }
         })
         .collect::<Vec<_>>();
-    let cost = |i: usize| scan.get(i).map_or(f64::INFINITY, |c| c.1);
-    let mut minima: Vec<(f64, f64, Vector3<f64>)> = (0..scan.len())
+    let cost = |i: usize| scan.get(i).map_or(f64::INFINITY, |c| c.cost_m2);
+    let mut minima: Vec<ScanMinimum> = (0..scan.len())
         .filter(|&i| {
             let c = cost(i);
             c.is_finite() && c <= cost(i.wrapping_sub(1)) && c <= cost(i + 1)
         })
         .map(|i| scan[i])
         .collect();
-    minima.sort_by(|a, b| a.1.total_cmp(&b.1));
+    minima.sort_by(|a, b| a.cost_m2.total_cmp(&b.cost_m2));
     minima.truncate(count);
     minima
 }
