@@ -822,8 +822,8 @@ fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
         "refined by the pose fit ({} windows of {:.0} s: Δt {:+.4} ± {:.4} s, the estimate's sensor at ({:+.2}, {:+.2}, {:+.2}) m from the reference's point, fitted alongside)",
         pc.profile.windows.len(),
         pc.profile.window_s,
-        pc.whole.0,
-        pc.whole.1,
+        pc.first_offset.0,
+        pc.first_offset.1,
         lever.x,
         lever.y,
         lever.z
@@ -851,7 +851,7 @@ fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
 fn pose_entry(pc: &crate::align::pose_model::PoseClock) -> OffsetMethodReport {
     OffsetMethodReport {
         method: OffsetMethod::Pose,
-        offset_s: Some(pc.whole.0),
+        offset_s: Some(pc.first_offset.0),
         correlation: crate::align::offset_profile::median(
             &pc.profile
                 .windows

@@ -158,7 +158,7 @@ pub struct PoseClock {
     pub lever: (Vector3<f64>, Option<Vector3<f64>>),
     /// The final fit's first clock parameter (the constant; the line's offset at t_mid; the first
     /// segment's offset) and its σ as the model reports it.
-    pub whole: (f64, f64),
+    pub first_offset: (f64, f64),
     /// Windows left out of the whole-mission fit (their residual far above the others').
     pub outlier_windows: usize,
     /// What the headline σ was made of; `None` when the model's parameters are the windows'.
@@ -244,7 +244,7 @@ pub fn pose_clock_model(
     let sigma_parts = set_parameters(&mut model, &last, &profile, valley_s);
     model.describe();
     // θ₀'s σ as reported: the headline's, or the first segment's.
-    let whole_sigma_s = match model.model {
+    let first_sigma_s = match model.model {
         OffsetModel::Piecewise => model.segments.first().map_or(model.sigma_s, |s| s.sigma_s),
         _ => model.sigma_s,
     };
@@ -253,7 +253,7 @@ pub fn pose_clock_model(
         model,
         sigma_parts,
         outlier_windows: last.outliers.len(),
-        whole: (last.theta[0], whole_sigma_s),
+        first_offset: (last.theta[0], first_sigma_s),
         lever: (last.lever_m, last.lever_sigma_m),
         fit: Some(last),
     })
@@ -656,7 +656,7 @@ impl Mission<'_, '_> {
         Some(PoseClock {
             outlier_windows: 0,
             sigma_parts: None,
-            whole: (model.offset_s, model.sigma_s),
+            first_offset: (model.offset_s, model.sigma_s),
             fit: None,
             profile,
             model,
