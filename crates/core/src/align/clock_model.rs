@@ -140,16 +140,18 @@ pub struct ClockModel {
 }
 
 impl ClockModel {
-    /// A piecewise model's headline: its longest segment's offset and σ.
-    pub fn headline_from_longest_segment(&mut self) {
-        if let Some(s) = self
+    /// A piecewise model's headline: its longest segment's offset and σ. Returns that segment's
+    /// index (`None` without segments, the headline then unchanged).
+    pub fn headline_from_longest_segment(&mut self) -> Option<usize> {
+        let (k, offset_s, sigma_s) = self
             .segments
             .iter()
-            .max_by(|a, b| (a.t_end - a.t_start).total_cmp(&(b.t_end - b.t_start)))
-        {
-            self.offset_s = s.offset_s;
-            self.sigma_s = s.sigma_s;
-        }
+            .enumerate()
+            .max_by(|(_, a), (_, b)| (a.t_end - a.t_start).total_cmp(&(b.t_end - b.t_start)))
+            .map(|(k, s)| (k, s.offset_s, s.sigma_s))?;
+        self.offset_s = offset_s;
+        self.sigma_s = sigma_s;
+        Some(k)
     }
 
     /// Writes `reason` from the model's numbers and its criterion.

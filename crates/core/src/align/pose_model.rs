@@ -774,14 +774,9 @@ fn set_parameters(
                 };
                 each.push(parts);
             }
-            model.headline_from_longest_segment();
-            // The headline's segment: the one whose offset and σ it took.
-            model
-                .segments
-                .iter()
-                .zip(each)
-                .find(|(s, _)| s.offset_s == model.offset_s && s.sigma_s == model.sigma_s)
-                .map(|(_, p)| p)
+            // What the headline's σ was made of: its segment's.
+            let k = model.headline_from_longest_segment()?;
+            each.into_iter().nth(k)
         }
     }
 }
