@@ -792,6 +792,8 @@ fn pose_data<'a>(
         params: PoseFitParams {
             max_gap_s,
             window_s: None,
+            // The pose clock model chooses it from the reference's speed.
+            scale_prior_m: crate::align::pose_fit::SCALE_PRIOR_M,
         },
     }
 }

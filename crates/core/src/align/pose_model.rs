@@ -3,7 +3,9 @@
 //!
 //! 1. **Whole mission.** One Δt and the lever D fitted over every window ([`pose_fit::fit`]), from the
 //!    offset the signal searches found; windows whose fit leaves a residual far above the others (a
-//!    jump of the estimate inside them) are left out.
+//!    jump of the estimate inside them) are left out. Each window's scale is held to the mission's
+//!    by the prior [`scale_prior_m`] chooses from the reference's speed (firm for a vehicle, loose
+//!    for a robot that walks: [`walking`]).
 //! 2. **Profile.** Each window's own Δt with D held ([`pose_fit::profile`]; searched ±3 s for a
 //!    deeper root where the whole mission's constant is uncertain beyond 2 ms), its σ the window's
 //!    least-squares error calibrated by the scatter of the windows about their neighbours, a factor
@@ -33,8 +35,9 @@
 //! lever/speed (at a walk, a 0.3 m lever is a second), and the fit from there stays in the long
 //! valley where Δt trades against the forward lever, which only the gait's ripple of the speed and
 //! the turns slope; a speed search can match a smooth walking speed at a wrong lag, confidently.
-//! Where the windows chose one constant clock and [`LEAD_LEVER_M`] over the reference's median
-//! speed (the lead, at most [`MAX_LEAD_S`]) exceeds [`LEAD_REACH`] times [`MAX_DISAGREEMENT_S`],
+//! Where the windows chose one constant clock and [`LEAD_LEVER_M`] over the reference's mean speed
+//! while it moves (the lead, at most [`MAX_LEAD_S`]) exceeds [`LEAD_REACH`] times
+//! [`MAX_DISAGREEMENT_S`] (the robot is [`walking`]),
 //! Δt is scanned from the lead before the earliest confident search's answer to the lead after the
 //! latest, the lever solved at each candidate ([`pose_fit::coarse_minima`]); constant fits start
 //! from the scan's best minima (with the lever found there, else none) and compete with the near
@@ -181,9 +184,14 @@ pub fn pose_clock_model(
     signals: Signals<'_>,
     forced: Option<OffsetModel>,
 ) -> Option<PoseClock> {
+    // The reference's mean speed while it moves (a robot that stands half the mission still walks).
+    let moving_speed_mps =
+        crate::align::auto_params::moving_speed(data.ref_t, data.ref_p, data.params.max_gap_s)
+            .map(|(v, _)| v);
     let data = PoseData {
         params: pose_fit::PoseFitParams {
             window_s: profile_params.window_s.or(data.params.window_s),
+            scale_prior_m: scale_prior_m(moving_speed_mps),
             ..data.params
         },
         ..*data
@@ -214,7 +222,13 @@ pub fn pose_clock_model(
                 .chain(other_answers_s.iter().copied())
                 .filter(|a| a.is_finite() && (a - start_s).abs() <= MAX_ANSWER_SPREAD_S)
                 .collect();
-            lead_search(&data, &mission.windows, &answers, near.as_ref())
+            lead_search(
+                &data,
+                &mission.windows,
+                &answers,
+                near.as_ref(),
+                moving_speed_mps?,
+            )
         })
         .flatten();
     if let Some(far) = lead.as_ref().and_then(|l| l.far(near.as_ref())) {
@@ -288,6 +302,42 @@ fn whole_mission_fit(
     })
 }
 
+/// Whether a robot whose mean speed while it moves is `moving_speed_mps` walks: a forward lever of
+/// [`LEAD_LEVER_M`] then leads by more than [`LEAD_REACH`] × [`MAX_DISAGREEMENT_S`] (below 0.83 m/s).
+/// The lead search runs there, and the windows' scale prior is the walking one.
+pub fn walking(moving_speed_mps: f64) -> bool {
+    LEAD_LEVER_M / moving_speed_mps > LEAD_REACH * MAX_DISAGREEMENT_S
+}
+
+/// The windows' scale prior for a reference whose mean speed while it moves is `moving_speed_mps`
+/// (`None`: it hardly moves), metres of spread per sample.
+///
+/// **Why two.** A window's free scale absorbs a speed that changes steadily within it: along the
+/// track ê(t − Δt) is then a scaled copy of ê(t), and Δt rests on what the speed does beyond a
+/// line. On a near-straight drive that is little, and the forward lever takes the rest. Odometry's
+/// scale error changes slowly (a wheel's radius, a lidar's near-unit scale), so a vehicle's windows
+/// are held to the mission's scale ([`pose_fit::VEHICLE_SCALE_PRIOR_M`]: a 20 s window at 1 m/s spreads
+/// 5.8 m per sample, its scale then mostly the mission's). On the second simulator's missions this
+/// took ground missions' median error from 7.5 to 3 ms and near-straight ones' from 10.7 to 2 ms
+/// (docs/evidence.md). A walking robot ([`walking`]) keeps [`pose_fit::SCALE_PRIOR_M`]: the stronger prior moved which of
+/// its gait's near-equal basins won, both ways, and read false clock steps on three legged
+/// missions.
+///
+/// ```
+/// use trajdrift_core::align::pose_fit::{SCALE_PRIOR_M, VEHICLE_SCALE_PRIOR_M};
+/// use trajdrift_core::align::pose_model::scale_prior_m;
+/// assert_eq!(scale_prior_m(Some(1.5)), VEHICLE_SCALE_PRIOR_M);
+/// assert_eq!(scale_prior_m(Some(0.4)), SCALE_PRIOR_M);
+/// assert_eq!(scale_prior_m(None), SCALE_PRIOR_M);
+/// ```
+pub fn scale_prior_m(moving_speed_mps: Option<f64>) -> f64 {
+    if moving_speed_mps.is_some_and(|v| !walking(v)) {
+        pose_fit::VEHICLE_SCALE_PRIOR_M
+    } else {
+        pose_fit::SCALE_PRIOR_M
+    }
+}
+
 /// What the lead search found: the fits along the forward lever's valley (the near one among
 /// them), each with its residual per point in every window of `windows` (the mission's, less
 /// those any of the fits left out as jumps).
@@ -352,6 +402,7 @@ fn lead_search(
     windows: &[pose_fit::Window],
     answers_s: &[f64],
     near: Option<&PoseFit>,
+    moving_speed_mps: f64,
 ) -> Option<Lead> {
     // A sensor ahead of the other reads as a clock offset of lever/speed in the signal searches,
     // which at a walk lies beyond MAX_DISAGREEMENT_S; the positions with the lever fitted tell
@@ -360,14 +411,10 @@ fn lead_search(
     // long missions: the scan only finds basins), the fits from its best minima compete with the
     // near one on their residual over every window (the scan's own ranking is not trusted: its
     // grid samples the gait's ripples unevenly).
-    // The reference's mean speed while it moves (a robot that stands half the mission still walks).
-    let (speed_mps, _) =
-        crate::align::auto_params::moving_speed(data.ref_t, data.ref_p, data.params.max_gap_s)?;
-    let lead_s = LEAD_LEVER_M / speed_mps;
-    if lead_s <= LEAD_REACH * MAX_DISAGREEMENT_S {
+    if !walking(moving_speed_mps) {
         return None;
     }
-    let lead_s = lead_s.min(MAX_LEAD_S);
+    let lead_s = (LEAD_LEVER_M / moving_speed_mps).min(MAX_LEAD_S);
     // Over the lead about every answer: a speed search can match a smooth speed at a wrong lag
     // with confidence, and the curvature searches' answer then lies the lead from the truth.
     let (lo_s, hi_s) = answers_s

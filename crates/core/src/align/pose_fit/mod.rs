@@ -23,8 +23,11 @@
 //! a jump or a gap; gaps longer than the largest gap are not bridged). Where the estimate jumps ([`crate::align::jumps`]: a localiser correcting
 //! itself), each side of the jump within a window has its own similarity and drift (the sides share
 //! only θ and D), and the points whose interpolation would reach across the jump are left out. A
-//! window's scale is held to the mission's by a prior worth [`SCALE_PRIOR_M`] of spread per sample, so a window that stands or turns in place (whose positions barely spread)
-//! keeps the mission's scale and still pins D: its reference stands still while ê sweeps the lever's
+//! window's scale is held to the mission's by a prior worth [`PoseFitParams::scale_prior_m`] of
+//! spread per sample ([`SCALE_PRIOR_M`] for a robot that walks, [`VEHICLE_SCALE_PRIOR_M`] for a
+//! vehicle, whose free window scale would absorb a speed changing steadily within the window and
+//! leave Δt to the lever on straight stretches: `align::pose_model::scale_prior_m`), so a window
+//! that stands or turns in place (whose positions barely spread) keeps the mission's scale and still pins D: its reference stands still while ê sweeps the lever's
 //! arc. The similarity of each window has a closed form (Umeyama: an SVD of the 3×3 cross-covariance);
 //! θ and D are found by Gauss–Newton on the normal equations reduced by each window's similarity
 //! (the Schur complement of the full system), from the offset `auto` found.
@@ -99,8 +102,11 @@ pub const WINDOW_S: f64 = 20.0;
 /// The fewest reference samples in a window.
 pub const MIN_WINDOW_SAMPLES: usize = 20;
 /// A window's scale follows its own data only as far as its positions spread more than this per
-/// sample, metres (the prior's weight is n·SCALE_PRIOR_M²).
+/// sample, metres (the prior's weight is n·P²): P for a robot that walks, stands or turns in place
+/// (its windows spread a few metres; see `align::pose_model::scale_prior_m`).
 pub const SCALE_PRIOR_M: f64 = 1.0;
+/// P for a vehicle, metres (see `align::pose_model::scale_prior_m`).
+pub const VEHICLE_SCALE_PRIOR_M: f64 = 10.0;
 /// A window's heading drift rate follows its own data only as far as they determine it better than
 /// this prior: σ 10⁻³ rad/s (0.06°/s) against 2 cm of noise per sample (weight n·(0.02/10⁻³)² m²s²).
 pub const DRIFT_PRIOR_M2S2: f64 = 400.0;
@@ -233,6 +239,9 @@ pub struct PoseFitParams {
     pub max_gap_s: f64,
     /// The window length (`None`: [`WINDOW_S`], longer at low reference rates).
     pub window_s: Option<f64>,
+    /// The windows' scale prior P, metres of spread per sample ([`SCALE_PRIOR_M`] or
+    /// [`VEHICLE_SCALE_PRIOR_M`]: `align::pose_model::scale_prior_m` chooses by the reference's speed).
+    pub scale_prior_m: f64,
 }
 
 /// The reference, the estimate's poses and the settings of one mission's fits.

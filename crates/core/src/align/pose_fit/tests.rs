@@ -112,6 +112,7 @@ impl Sim {
             params: PoseFitParams {
                 max_gap_s: 1.0,
                 window_s: None,
+                scale_prior_m: super::SCALE_PRIOR_M,
             },
         }
     }

@@ -9,7 +9,7 @@
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, Vector3};
 
 use super::sampler::{At, Sampler};
-use super::{ClockShape, PoseData, DRIFT_PRIOR_M2S2, MIN_WINDOW_SAMPLES, SCALE_PRIOR_M, WINDOW_S};
+use super::{ClockShape, PoseData, DRIFT_PRIOR_M2S2, MIN_WINDOW_SAMPLES, WINDOW_S};
 
 /// The half-step h of the instrument's central differences: one of the estimate's periods, at
 /// least 50 ms (a difference over shorter times is mostly the estimate's noise: 3 mm of noise over
@@ -83,6 +83,8 @@ pub(super) struct Problem<'a> {
     /// instrument's, and the Jacobian's (two of the estimate's periods more: mostly other samples).
     h: f64,
     hw: f64,
+    /// The windows' scale prior, metres of spread per sample (see [`super::PoseFitParams::scale_prior_m`]).
+    scale_prior_m: f64,
 }
 
 /// One point of a window: reference position, the estimate's position ê, u = ê − R̂·D, ∂u/∂Δt
@@ -130,11 +132,16 @@ impl Terms {
 
 /// The reduced normal equations of the points `pts` under one similarity and drift (a window, or
 /// a stretch of one between jumps; see [`Problem::terms`]).
-fn segment_terms(pts: Vec<Pt>, shape: &ClockShape, with_lever: bool, s_bar: f64) -> Option<Terms> {
+fn segment_terms(
+    pts: Vec<Pt>,
+    shape: &ClockShape,
+    with_lever: bool,
+    (s_bar, prior_m): (f64, f64),
+) -> Option<Terms> {
     let m = shape.len();
     let p = m + if with_lever { 3 } else { 0 };
     let n = pts.len();
-    let win = WindowPoints::new(pts);
+    let win = WindowPoints::new(pts, prior_m);
     let nuisance = win.nuisance(s_bar);
     let mut sums = NormalSums::zeros(p);
     let mut shared = SharedColumns::new(m, with_lever);
@@ -193,13 +200,13 @@ impl Problem<'_> {
             return None;
         }
         if pts.first().map(|q| q.seg) == pts.last().map(|q| q.seg) {
-            return segment_terms(pts, shape, with_lever, s_bar);
+            return segment_terms(pts, shape, with_lever, (s_bar, self.scale_prior_m));
         }
         // A jump of the estimate within the window: each stretch between jumps its own similarity
         // and drift, their reduced equations summed (the stretches share only θ and D).
         let mut total: Option<Terms> = None;
         for run in stretches(pts) {
-            let Some(t) = segment_terms(run, shape, with_lever, s_bar) else {
+            let Some(t) = segment_terms(run, shape, with_lever, (s_bar, self.scale_prior_m)) else {
                 continue;
             };
             total = Some(match total {
@@ -253,7 +260,7 @@ impl Problem<'_> {
         }
         let (mut rss, mut n) = (0.0, 0usize);
         for run in stretches(pts) {
-            let win = WindowPoints::new(run);
+            let win = WindowPoints::new(run, self.scale_prior_m);
             rss += win.similarity_rss(s_bar);
             n += win.pts.len();
         }
@@ -312,11 +319,13 @@ struct WindowPoints {
     tbar_s: f64,
     /// Σ|p_ref − p̄_ref|²: what the window's motion explains (see [`Terms`]).
     s_rr: f64,
+    /// The scale prior, metres of spread per sample ([`super::PoseFitParams::scale_prior_m`]).
+    scale_prior_m: f64,
 }
 
 impl WindowPoints {
-    /// The centroids of `pts`.
-    fn new(pts: Vec<Pt>) -> WindowPoints {
+    /// The centroids of `pts`; the scale held by a prior of `scale_prior_m`.
+    fn new(pts: Vec<Pt>, scale_prior_m: f64) -> WindowPoints {
         let nf = pts.len() as f64;
         let rbar_m = pts.iter().map(|q| q.r).sum::<Vector3<f64>>() / nf;
         let ubar_m = pts.iter().map(|q| q.u).sum::<Vector3<f64>>() / nf;
@@ -329,19 +338,20 @@ impl WindowPoints {
             ubar_m,
             tbar_s,
             s_rr,
+            scale_prior_m,
         }
     }
 
     /// The scale given Σ r̃·R·ũ (`tr`) and Σ|ũ|² (`s_uu`), held about the mission's `s_bar` by its
-    /// prior (weight n·[`SCALE_PRIOR_M`]²).
+    /// prior (weight n·P², P the window's `scale_prior_m`).
     fn scale_of(&self, tr: f64, s_uu: f64, s_bar: f64) -> f64 {
         let lambda = self.scale_prior_m2();
         ((tr + lambda * s_bar) / (s_uu + lambda)).max(1e-3)
     }
 
-    /// The scale prior's weight λ = n·[`SCALE_PRIOR_M`]², m².
+    /// The scale prior's weight λ = n·P², m².
     fn scale_prior_m2(&self) -> f64 {
-        self.nf * SCALE_PRIOR_M * SCALE_PRIOR_M
+        self.nf * self.scale_prior_m * self.scale_prior_m
     }
 
     /// Σ|p_ref − r̄ − s·R·(u − ū)|² under the similarity alone (no heading drift): the residual a
@@ -443,7 +453,7 @@ struct Nuisance {
     /// Σ r̃·R·ũ and Σ|ũ|² of the last similarity (the window's scale evidence, see [`Terms`]).
     tr: f64,
     s_uu: f64,
-    /// The scale prior's weight λ = n·[`SCALE_PRIOR_M`]², m².
+    /// The scale prior's weight λ = n·P², m².
     lambda_m2: f64,
 }
 
@@ -703,6 +713,7 @@ impl<'a> PoseData<'a> {
             sampler: Sampler::new(self.estimate, self.params.max_gap_s),
             h: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S),
             hw: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S) + 2.0 * period,
+            scale_prior_m: self.params.scale_prior_m,
         }
     }
 }
@@ -755,7 +766,7 @@ pub fn locate_change(
                 .map(|(a, b)| if before { a.clone() } else { b.clone() })
                 .collect();
             (pts.len() >= MIN_WINDOW_SAMPLES).then(|| {
-                let w = WindowPoints::new(pts);
+                let w = WindowPoints::new(pts, problem.scale_prior_m);
                 let n = w.nuisance(s_bar);
                 (w, n)
             })
