@@ -146,14 +146,7 @@ pub fn coarse_minima(
         .map(|i| {
             let theta = [start_s + i as f64 * step_s];
             let mut lever = Vector3::zeros();
-            // The windows' scales are held about the mission's: compared at scale 1, an estimate
-            // whose odometry is 3 % long fits every candidate badly, and the truth's basin can fall
-            // out of the best minima.
             let mut terms = fit.eval(&theta, &lever, 1.0);
-            let scale = mission_scale(&terms).unwrap_or(1.0);
-            if scale != 1.0 {
-                terms = fit.eval(&theta, &lever, scale);
-            }
             for _ in 0..COARSE_LEVER_STEPS {
                 let (_, j, g) = fit.summed(&terms, &lever, lever_weight(&terms), 1.0);
                 let Some(step) = j
@@ -166,7 +159,7 @@ pub fn coarse_minima(
                 };
                 let step = Vector3::new(step[0], step[1], step[2]);
                 lever -= step;
-                terms = fit.eval(&theta, &lever, scale);
+                terms = fit.eval(&theta, &lever, 1.0);
                 if step.norm() < COARSE_LEVER_TOLERANCE_M {
                     break;
                 }
@@ -341,8 +334,13 @@ impl SharedFit<'_> {
     /// then re-evaluated with it, so that every step compares like with like. Done in the first
     /// iterations only.
     fn rescale(&self, x: &mut Iterate) {
-        if let Some(scale) = mission_scale(&x.terms).filter(|s| (s - x.scale).abs() > 1e-6) {
-            x.scale = scale;
+        let (tr, suu) = x
+            .terms
+            .iter()
+            .flatten()
+            .fold((0.0, 0.0), |(a, b), t| (a + t.tr, b + t.s_uu));
+        if suu > 0.0 && tr > 0.0 && (tr / suu - x.scale).abs() > 1e-6 {
+            x.scale = tr / suu;
             x.terms = self.eval(&x.theta, &x.lever_m, x.scale);
         }
     }
@@ -727,15 +725,6 @@ impl SharedFit<'_> {
 pub(super) fn lever_weight(terms: &[Option<Terms>]) -> f64 {
     let (rss, n) = residual_sums(terms);
     rss / (3.0 * n.max(1) as f64) / (LEVER_PRIOR_M * LEVER_PRIOR_M)
-}
-
-/// The mission's scale from the windows' evidence, Σ tr over Σ s_uu (`None` without any).
-fn mission_scale(terms: &[Option<Terms>]) -> Option<f64> {
-    let (tr, suu) = terms
-        .iter()
-        .flatten()
-        .fold((0.0, 0.0), |(a, b), t| (a + t.tr, b + t.s_uu));
-    (suu > 0.0 && tr > 0.0).then(|| tr / suu)
 }
 
 /// The residual sum of squares and the points of the windows' `terms`.
