@@ -303,7 +303,8 @@ fn whole_mission_fit(
 }
 
 /// Whether a robot whose mean speed while it moves is `moving_speed_mps` walks: a forward lever of
-/// [`LEAD_LEVER_M`] then leads by more than [`LEAD_REACH`] × [`MAX_DISAGREEMENT_S`] (below 0.83 m/s).
+/// [`LEAD_LEVER_M`] then leads by more than [`LEAD_REACH`] × [`MAX_DISAGREEMENT_S`] (below
+/// 0.83 m/s).
 /// The lead search runs there, and the windows' scale prior is the walking one.
 pub fn walking(moving_speed_mps: f64) -> bool {
     LEAD_LEVER_M / moving_speed_mps > LEAD_REACH * MAX_DISAGREEMENT_S
@@ -395,9 +396,10 @@ fn same_basin(a: &PoseFit, b: &PoseFit) -> bool {
 }
 
 /// The lead search (see the module doc): constant fits from the best minima of a scan of Δt over
-/// the lead a forward lever can make at the reference's walking speed about the confident
-/// searches' answers `answers_s`, with the fit `near` (the whole mission's, from the applied
-/// answer); `None` where the robot is not walking or the lead cannot leave the near fit's reach.
+/// the lead a forward lever can make at the reference's walking speed `moving_speed_mps` (its
+/// mean while it moves) about the confident searches' answers `answers_s`, with the fit `near`
+/// (the whole mission's, from the applied answer); `None` where the robot is not [`walking`] or
+/// no answer is finite.
 fn lead_search(
     data: &PoseData<'_>,
     windows: &[pose_fit::Window],

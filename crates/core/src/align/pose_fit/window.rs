@@ -83,7 +83,8 @@ pub(super) struct Problem<'a> {
     /// instrument's, and the Jacobian's (two of the estimate's periods more: mostly other samples).
     h: f64,
     hw: f64,
-    /// The windows' scale prior, metres of spread per sample (see [`super::PoseFitParams::scale_prior_m`]).
+    /// The windows' scale prior, metres of spread per sample
+    /// ([`super::PoseFitParams::scale_prior_m`]).
     scale_prior_m: f64,
 }
 
