@@ -789,12 +789,8 @@ fn pose_data<'a>(
             q: orientations,
             jumps,
         },
-        params: PoseFitParams {
-            max_gap_s,
-            window_s: None,
-            // The pose clock model chooses it from the reference's speed.
-            scale_prior_m: crate::align::pose_fit::SCALE_PRIOR_M,
-        },
+        // The pose clock model chooses the window and the scale prior for the mission.
+        params: PoseFitParams::new(max_gap_s),
     }
 }
 

@@ -246,6 +246,21 @@ pub struct PoseFitParams {
     pub scale_prior_m: f64,
 }
 
+impl PoseFitParams {
+    /// The settings a mission's fits start from: the estimate's gaps up to `max_gap_s`
+    /// interpolated, windows of the default length and the walking robot's scale prior.
+    /// `align::pose_model::pose_clock_model` chooses the window and the prior for the mission in
+    /// hand (the profile's window length, the reference's speed); a caller fitting directly keeps
+    /// these.
+    pub fn new(max_gap_s: f64) -> PoseFitParams {
+        PoseFitParams {
+            max_gap_s,
+            window_s: None,
+            scale_prior_m: SCALE_PRIOR_M,
+        }
+    }
+}
+
 /// The reference, the estimate's poses and the settings of one mission's fits.
 pub struct PoseData<'a> {
     pub ref_t: &'a [f64],

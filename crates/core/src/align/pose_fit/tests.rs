@@ -109,11 +109,7 @@ impl Sim {
                 q: &self.q,
                 jumps: &self.jumps,
             },
-            params: PoseFitParams {
-                max_gap_s: 1.0,
-                window_s: None,
-                scale_prior_m: super::SCALE_PRIOR_M,
-            },
+            params: PoseFitParams::new(1.0),
         }
     }
 }
