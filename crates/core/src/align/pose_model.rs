@@ -82,17 +82,16 @@ pub const MAX_DISAGREEMENT_S: f64 = 0.3;
 pub const LEAD_LEVER_M: f64 = 0.5;
 /// The lead at most, seconds (a lever of 0.5 m at 0.2 m/s).
 pub const MAX_LEAD_S: f64 = 2.5;
-/// The lead search's step, seconds: about a fifth of the shortest gait period it must resolve (a
-/// step rate up to 2.6 Hz, its bob at twice that, ripples the valley every 0.19–0.38 s). At 0.1 s
-/// the scan's best minima missed the truth's basin on walking missions of a second simulator, which
-/// were then read 0.2–0.5 s off (docs/evidence.md, "The lead search, finer").
+/// The lead search's step, seconds (a step rate up to 2.6 Hz, its bob at twice that, ripples the
+/// valley every 0.19–0.38 s). At 0.1 s the fit from the scan's minimum by the truth, 0.04–0.07 s
+/// from it, slid into another basin on walking missions of a second simulator, which were then
+/// read 0.2–0.5 s off (docs/evidence.md, "The lead search, finer").
 pub const LEAD_STEP_S: f64 = 0.05;
 /// Two fits, or a fit and a scan's minimum, within this of each other lie in one basin, seconds.
 pub const SAME_BASIN_S: f64 = 0.1;
-/// The lead search fits from this many of its best minima at most (outside the near fit's basin):
-/// the scan ranks the gait's ripples unevenly, and the truth's basin was the fourth to sixth best
-/// where three were fitted.
-pub const LEAD_MINIMA: usize = 6;
+/// The lead search fits from this many of its best minima at most (outside the near fit's basin;
+/// six moved no mission of the second simulator's 256 walking ones by more than 0.03 ms).
+pub const LEAD_MINIMA: usize = 3;
 /// A fit along the valley is told from another when the windows' residuals, paired, differ by at
 /// least this many of their standard errors (a t statistic); nearer, σ covers both (see the module
 /// doc).
