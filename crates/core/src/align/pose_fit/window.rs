@@ -33,8 +33,7 @@ const STENCIL_MAX_S: f64 = 0.25;
 /// (twice a 1.4–2.6 Hz gait) sit; where that motion of the sensor outweighed the walk, J came out
 /// negative beside a positive H in nearly every window, the profile's Newton had no step and the
 /// mission no pose fit (a legged mission of the second simulator 1.03 s off, others a gait period
-/// off under a σ that covered it). At 100 ms (negative from 5 Hz) those missions come out within
-/// 0.4 ms (`a_gait_bob_at_20_hz_leaves_the_jacobian_positive` in the tests holds the sign); from
+/// off under a σ that covered it). At 100 ms (negative from 5 Hz) they are within 0.4 ms; from
 /// 100 Hz up h is the 50 ms floor, several periods, and one period more is a few milliseconds.
 const JACOBIAN_EXTRA_PERIODS: f64 = 1.0;
 /// A window's search compares its residual on every ⌊n/SEARCH_POINTS⌋-th of its n reference
@@ -67,9 +66,10 @@ pub(super) struct Terms {
     /// they share samples where h is a whole number of periods: see [`STENCIL_MIN_S`]); h = Σ v·v
     /// (the formal σ's middle); j = Σ v·w with w the same derivative over one of the estimate's
     /// periods more (other samples at its ends than v's; the cubics around them share some, see
-    /// [`JACOBIAN_EXTRA_PERIODS`]): the Newton Jacobian of g, nearly free of the bias Σ v·v takes
-    /// from v's noise, which steps the fits (the error bar measures the clock columns instead:
-    /// `SharedFit::jacobians`). The window's similarity and drift eliminated (Schur complement).
+    /// [`JACOBIAN_EXTRA_PERIODS`]): the
+    /// Newton Jacobian of g, nearly free of the bias Σ v·v takes from v's noise, which steps the
+    /// fits (the error bar measures the clock columns instead: `SharedFit::jacobians`). The
+    /// window's similarity and drift eliminated (Schur complement).
     pub(super) h: DMatrix<f64>,
     pub(super) j: DMatrix<f64>,
     pub(super) g: DVector<f64>,
