@@ -24,18 +24,6 @@ use super::{ClockShape, PoseData, DRIFT_PRIOR_M2S2, MIN_WINDOW_SAMPLES, WINDOW_S
 /// rates probe no further.
 const STENCIL_MIN_S: f64 = 0.05;
 const STENCIL_MAX_S: f64 = 0.25;
-/// How much wider the Newton Jacobian's central difference is than the instrument's, in the
-/// estimate's periods: h_w = h + one period. Wider, so that its ends are other samples than the
-/// instrument's (their noise then biases Σ v·w little, where Σ v·v takes v's noise squared); not
-/// wider still, for the reason h is one period: over ±h_w it answers motion at f in proportion to
-/// sin(2πf·h_w)/(2πf·h_w), negative from 1/(2h_w) to 1/h_w. With two periods more a 20 Hz
-/// estimate's h_w was 150 ms, negative from 3.3 to 6.7 Hz, where a walking robot's bob and pitch
-/// (twice a 1.4–2.6 Hz gait) sit; where that motion of the sensor outweighed the walk, J came out
-/// negative beside a positive H in nearly every window, the profile's Newton had no step and the
-/// mission no pose fit (a legged mission of the second simulator 1.03 s off, others a gait period
-/// off under a σ that covered it). At 100 ms (negative from 5 Hz) they are within 0.4 ms; from
-/// 100 Hz up h is the 50 ms floor, several periods, and one period more is a few milliseconds.
-const JACOBIAN_EXTRA_PERIODS: f64 = 1.0;
 /// A window's search compares its residual on every ⌊n/SEARCH_POINTS⌋-th of its n reference
 /// samples (this many to twice as many; all of a window of fewer), and the root it finds is then
 /// refined on all of them. A stretch between jumps counts [`MIN_SEGMENT_SAMPLES`] of those taken.
@@ -64,9 +52,8 @@ pub(super) struct Terms {
     /// The estimating equations g = Σ v·e over the shared parameters, v the instrument (∂model/∂θ
     /// from central differences over ±h, whose noise is uncorrelated with the point's own although
     /// they share samples where h is a whole number of periods: see [`STENCIL_MIN_S`]); h = Σ v·v
-    /// (the formal σ's middle); j = Σ v·w with w the same derivative over one of the estimate's
-    /// periods more (other samples at its ends than v's; the cubics around them share some, see
-    /// [`JACOBIAN_EXTRA_PERIODS`]): the
+    /// (the formal σ's middle); j = Σ v·w with w the same derivative over two of the estimate's
+    /// periods more (mostly other samples than v's; the cubics at the ends share one or two): the
     /// Newton Jacobian of g, nearly free of the bias Σ v·v takes from v's noise, which steps the
     /// fits (the error bar measures the clock columns instead: `SharedFit::jacobians`). The
     /// window's similarity and drift eliminated (Schur complement).
@@ -93,7 +80,7 @@ pub(super) struct Problem<'a> {
     ref_p: &'a [Vector3<f64>],
     sampler: Sampler<'a>,
     /// The half-steps of the central differences for ∂u/∂Δt, seconds (see [`Terms`]): the
-    /// instrument's, and the Jacobian's ([`JACOBIAN_EXTRA_PERIODS`] more).
+    /// instrument's, and the Jacobian's (two of the estimate's periods more: mostly other samples).
     h: f64,
     hw: f64,
     /// The windows' scale prior, metres of spread per sample
@@ -721,13 +708,12 @@ impl<'a> PoseData<'a> {
             let mid = steps.len() / 2;
             *steps.select_nth_unstable_by(mid, f64::total_cmp).1
         };
-        let h = period.clamp(STENCIL_MIN_S, STENCIL_MAX_S);
         Problem {
             ref_t: self.ref_t,
             ref_p: self.ref_p,
             sampler: Sampler::new(self.estimate, self.params.max_gap_s),
-            h,
-            hw: h + JACOBIAN_EXTRA_PERIODS * period,
+            h: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S),
+            hw: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S) + 2.0 * period,
             scale_prior_m: self.params.scale_prior_m,
         }
     }
