@@ -137,6 +137,10 @@ pub struct ClockModel {
     /// The criterion's verdict the reason ends with.
     #[serde(skip)]
     pub criterion: String,
+    /// The spread of the offsets the windows alternate between where they step out and back
+    /// ([`steps_out_and_back`]: two basins of a fit, read as `constant`), seconds; 0 otherwise.
+    #[serde(skip)]
+    pub alternation_s: f64,
 }
 
 impl ClockModel {
@@ -197,6 +201,7 @@ impl ClockModel {
             bic: [f64::NAN; 3],
             reason,
             criterion: String::new(),
+            alternation_s: 0.0,
         }
     }
 }
@@ -443,6 +448,29 @@ fn segment(w: &[ProfileWindow], min_len: usize, rho: f64, n_eff: f64, steps: Ste
     splits
 }
 
+/// Whether the steps found at `splits` go out and back: some segment's offset within a quarter of
+/// the step before it of the offset two segments earlier (A → B → A). A clock that steps does not
+/// come back to within milliseconds of where it was; a fit with two basins does, window after
+/// window: on walking robots of the second simulator whose sensor led the reference's point by
+/// 0.8 s at their walking speed, the profile's windows settled in two basins 0.43–0.55 s apart
+/// (the forward lever trading against Δt), alternating three to six times, and the BIC called
+/// them steps (clock alarms on constant clocks). Returns the spread of the segments' offsets.
+fn steps_out_and_back(w: &[ProfileWindow], splits: &[usize], rho: f64) -> Option<f64> {
+    let a: Vec<f64> = bounds(splits, w.len())
+        .windows(2)
+        .filter_map(|b| fit(&w[b[0]..b[1]], 0.0, false, rho).map(|f| f.a))
+        .collect();
+    let back = a
+        .windows(3)
+        .any(|s| (s[2] - s[0]).abs() < 0.25 * (s[1] - s[0]).abs());
+    let (lo, hi) = a
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+            (l.min(x), h.max(x))
+        });
+    back.then_some(hi - lo)
+}
+
 /// How the steps of a profile are judged.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Steps {
@@ -504,10 +532,21 @@ pub fn choose_model(
         (None, OffsetModel::Linear, Some((d, _)), Some(r)) if d.abs() < r => OffsetModel::Constant,
         (None, c, ..) => c,
     };
+    // Steps out and back are two basins of the fit, not a clock: constant, σ covering both.
+    let alternation = match (forced, chosen) {
+        (None, OffsetModel::Piecewise) => steps_out_and_back(&w, &splits, rho),
+        _ => None,
+    };
+    let chosen = if alternation.is_some() {
+        OffsetModel::Constant
+    } else {
+        chosen
+    };
+    let alternation_s = alternation.unwrap_or(0.0);
     let mut model = ClockModel {
         model: chosen,
         offset_s: whole.0,
-        sigma_s: whole_sigma.max(c.sigma_a),
+        sigma_s: whole_sigma.max(c.sigma_a).max(0.5 * alternation_s),
         t_mid,
         drift_ppm: drift.map(|d| d.0),
         drift_sigma_ppm: drift.map(|d| d.1),
@@ -516,7 +555,14 @@ pub fn choose_model(
         bic: criterion.bic,
         reason: String::new(),
         criterion: criterion.verdict(forced.is_some()),
+        alternation_s,
     };
+    if alternation.is_some() {
+        model.criterion = format!(
+            "{}; but the windows step out and back between offsets {alternation_s:.3} s apart: two basins of the fit (a forward lever trading against Δt at a steady walk), not a clock, and σ covers both",
+            model.criterion
+        );
+    }
     if let (None, OffsetModel::Linear, Some((d, _)), Some(r)) =
         (forced, criterion.choice(), drift, resolution)
     {
@@ -823,4 +869,55 @@ pub fn clock_model_of(
         }
     }
     Ok((p, m))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::align::time_offset::OffsetMethod;
+
+    /// A pose profile of disjoint 20 s windows, Δt `offset(k)` ± 3 ms in window k, with a jitter of
+    /// ±1 ms that repeats every three windows.
+    fn profile(n: usize, offset: impl Fn(usize) -> f64) -> OffsetProfile {
+        OffsetProfile {
+            method: OffsetMethod::Pose,
+            window_s: 20.0,
+            step_s: 20.0,
+            sigma_scale: 1.0,
+            windows: (0..n)
+                .map(|k| ProfileWindow {
+                    t: 10.0 + 20.0 * k as f64,
+                    offset_s: offset(k) + 1e-3 * (k % 3) as f64 - 1e-3,
+                    sigma_s: 0.003,
+                    correlation: 1.0,
+                    usable: true,
+                })
+                .collect(),
+        }
+    }
+
+    /// Windows in two basins 0.55 s apart, out and back (A → B → A): constant, not a step, with σ
+    /// covering both basins; the same windows stepping once stay a step.
+    #[test]
+    fn steps_out_and_back_are_two_basins_not_a_clock() {
+        let basins = profile(30, |k| if (10..20).contains(&k) { 1.63 } else { 1.08 });
+        let m = choose_model(&basins, (1.08, 0.005), None, None, Steps::Resolved);
+        assert_eq!(m.model, OffsetModel::Constant, "{}", m.reason);
+        assert!((m.alternation_s - 0.55).abs() < 0.01, "{}", m.alternation_s);
+        assert!(m.sigma_s >= 0.27, "{}", m.reason);
+        assert!(m.reason.contains("out and back"), "{}", m.reason);
+        let step = profile(30, |k| if k >= 15 { 1.63 } else { 1.08 });
+        let m = choose_model(&step, (1.08, 0.005), None, None, Steps::Resolved);
+        assert_eq!(m.model, OffsetModel::Piecewise, "{}", m.reason);
+        assert_eq!(m.alternation_s, 0.0);
+        // Forced, the steps stand.
+        let m = choose_model(
+            &basins,
+            (1.08, 0.005),
+            None,
+            Some(OffsetModel::Piecewise),
+            Steps::Resolved,
+        );
+        assert_eq!(m.model, OffsetModel::Piecewise, "{}", m.reason);
+    }
 }

@@ -799,7 +799,11 @@ fn set_parameters(
                 _ => 0.0,
             };
             let (sigma_s, parts) = offset_sigma(0, (f64::NEG_INFINITY, f64::INFINITY));
-            model.sigma_s = (sigma_s * sigma_s + hidden * hidden + valley_s * valley_s).sqrt();
+            // Windows in two basins (see `clock_model::steps_out_and_back`): σ covers both.
+            let basins_s = 0.5 * model.alternation_s;
+            model.sigma_s =
+                (sigma_s * sigma_s + hidden * hidden + valley_s * valley_s + basins_s * basins_s)
+                    .sqrt();
             Some(SigmaParts {
                 hidden_drift_s: hidden,
                 valley_s,
