@@ -18,7 +18,9 @@
 //! difference), unless the profile is a first look ([`Steps::Provisional`]). The change
 //! time is then located on the data themselves, to a few seconds: on the positions when the pose fit
 //! made the profile ([`crate::align::pose_fit::locate_change`]), else on the signals
-//! ([`locate_change`]).
+//! ([`locate_change`]). Steps that go out and back (a segment returning to the offset two
+//! segments before it, `steps_out_and_back`) are read as two basins of the fit, not a clock: the
+//! model is `constant`, its σ covering both (`alternation_s`).
 //!
 //! **The signal searches' constant** (a clock model from the speed or curvature profile, not the
 //! pose fit) keeps the whole mission's answer, one correlation over every sample, with σ the
@@ -138,7 +140,7 @@ pub struct ClockModel {
     #[serde(skip)]
     pub criterion: String,
     /// The spread of the offsets the windows alternate between where they step out and back
-    /// ([`steps_out_and_back`]: two basins of a fit, read as `constant`), seconds; 0 otherwise.
+    /// (`steps_out_and_back`: two basins of a fit, read as `constant`), seconds; 0 otherwise.
     #[serde(skip)]
     pub alternation_s: f64,
 }
