@@ -561,7 +561,7 @@ pub fn choose_model(
     };
     if alternation.is_some() {
         model.criterion = format!(
-            "{}; but the windows step out and back between offsets {alternation_s:.3} s apart: two basins of the fit (a forward lever trading against Δt at a steady walk), not a clock, and σ covers both",
+            "{}; but the windows step out and back between offsets {alternation_s:.3} s apart: two basins of the fit (on a walking robot, a forward lever trading against Δt), not a clock, and σ covers both",
             model.criterion
         );
     }
