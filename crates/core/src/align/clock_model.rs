@@ -456,12 +456,10 @@ fn segment(w: &[ProfileWindow], min_len: usize, rho: f64, n_eff: f64, steps: Ste
 /// window: on walking robots of the second simulator whose sensor led the reference's point by
 /// 0.8 s at their walking speed, the profile's windows settled in two basins 0.43–0.55 s apart
 /// (the forward lever trading against Δt), alternating three to six times, and the BIC called
-/// them steps (clock alarms on constant clocks). Returns the spread of the segments' offsets.
-fn steps_out_and_back(w: &[ProfileWindow], splits: &[usize], rho: f64) -> Option<f64> {
-    let a: Vec<f64> = bounds(splits, w.len())
-        .windows(2)
-        .filter_map(|b| fit(&w[b[0]..b[1]], 0.0, false, rho).map(|f| f.a))
-        .collect();
+/// them steps (clock alarms on constant clocks). `pieces`: the segments' fits in time order
+/// ([`Fits::pieces`]). Returns the spread of the segments' offsets.
+fn steps_out_and_back(pieces: &[Fit]) -> Option<f64> {
+    let a: Vec<f64> = pieces.iter().map(|f| f.a).collect();
     let back = a
         .windows(3)
         .any(|s| (s[2] - s[0]).abs() < 0.25 * (s[1] - s[0]).abs());
@@ -536,7 +534,7 @@ pub fn choose_model(
     };
     // Steps out and back are two basins of the fit, not a clock: constant, σ covering both.
     let alternation = match (forced, chosen) {
-        (None, OffsetModel::Piecewise) => steps_out_and_back(&w, &splits, rho),
+        (None, OffsetModel::Piecewise) => steps_out_and_back(&fits.pieces(rho)),
         _ => None,
     };
     let chosen = if alternation.is_some() {
@@ -642,11 +640,7 @@ impl Fits<'_> {
     /// ∞ for a linear model that could not be fitted and for steps when none was found.
     fn bics(&self, rho: f64, n_eff: f64) -> [f64; 3] {
         let bic = |chi2: f64, k: f64| chi2 / rho + k * n_eff.max(1.0).ln();
-        let w = self.windows;
-        let pieces: Vec<Fit> = bounds(self.splits, w.len())
-            .windows(2)
-            .filter_map(|b| fit(&w[b[0]..b[1]], 0.0, false, rho))
-            .collect();
+        let pieces = self.pieces(rho);
         let bic_c = bic(self.constant.chi2, 1.0);
         let bic_l = self.linear.map_or(f64::INFINITY, |l| bic(l.chi2, 2.0));
         let bic_p = if self.splits.is_empty() {
@@ -658,6 +652,15 @@ impl Fits<'_> {
             )
         };
         [bic_c, bic_l, bic_p]
+    }
+
+    /// The constant fits of the stretches between the splits, in time order (`rho`: ρ).
+    fn pieces(&self, rho: f64) -> Vec<Fit> {
+        let w = self.windows;
+        bounds(self.splits, w.len())
+            .windows(2)
+            .filter_map(|b| fit(&w[b[0]..b[1]], 0.0, false, rho))
+            .collect()
     }
 
     /// The linear fit's drift and its σ, ppm (positive: the estimate's clock runs fast): the σ from
