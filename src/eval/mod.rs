@@ -826,6 +826,14 @@ fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
         lever.y,
         lever.z
     );
+    if let Some((model, first_s)) = pc.replaced {
+        note.push_str(&format!(
+            "; the windows started from that answer chose {} ({:+.3} s first), but the lead search found this constant {:+.3} s away, fitting the windows better, and its own windows choose a constant too",
+            model.as_str(),
+            first_s,
+            pc.first_offset.0 - first_s
+        ));
+    }
     if pc.outlier_windows > 0 {
         note.push_str(&format!(
             "; {} window(s) left out: the estimate jumps there (a position correction, not a clock event)",

@@ -172,6 +172,9 @@ pub struct PoseClock {
     pub outlier_windows: usize,
     /// What the headline σ was made of; `None` when the model's parameters are the windows'.
     pub sigma_parts: Option<SigmaParts>,
+    /// When the lead search's constant replaced what the windows chose from the start: that
+    /// model and its first clock parameter, seconds.
+    pub replaced: Option<(OffsetModel, f64)>,
 }
 
 /// The speed signals of the pair (reference, estimate), asked for only when a step's time is not
@@ -216,13 +219,15 @@ pub fn pose_clock_model(
         forced,
     };
     let mut chosen = mission.choose(start_s)?;
-    // The lead search, only where the windows chose one constant clock: across a clock step the
-    // constant trades its lever for Δt as well, and the other segment's basin fits better.
+    // The lead search, where the windows chose one constant clock or a step of their own
+    // (`lead_searched`): across a true clock step the constant trades its lever for Δt as well,
+    // and the other segment's basin fits better, so a far constant replaces the chosen model only
+    // when the profile measured from it chooses a constant too.
     // A drift the final fit leaves below the resolution (`drift_resolved`) becomes a constant after
     // this: the windows chose a drift there, and the search is not run.
     // The near fit: the whole mission's, or without one the chosen constant's.
     let near = mission.whole.clone().or_else(|| chosen.fit.clone());
-    let lead = (chosen.model.model == OffsetModel::Constant)
+    let lead = lead_searched(chosen.model.model, mission.forced)
         .then(|| {
             let answers: Vec<f64> = std::iter::once(start_s)
                 .chain(other_answers_s.iter().copied())
@@ -237,6 +242,7 @@ pub fn pose_clock_model(
             )
         })
         .flatten();
+    let mut replaced = None;
     if let Some(far) = lead.as_ref().and_then(|l| l.far(near.as_ref())) {
         let other = Mission {
             whole: Some(far),
@@ -248,12 +254,19 @@ pub fn pose_clock_model(
             .choose(start_s)
             .filter(|c| c.model.model == OffsetModel::Constant)
         {
+            let first_s = chosen
+                .fit
+                .as_ref()
+                .map_or(chosen.model.offset_s, |f| f.theta[0]);
+            replaced = Some((chosen.model.model, first_s));
             (mission, chosen) = (other, c);
         }
     }
     // Without a converged fit of the chosen model, its parameters stay those of the windows.
     let Some(last) = chosen.fit else {
-        return mission.without_fit(chosen.profile, chosen.model, chosen.lever_m);
+        return mission
+            .without_fit(chosen.profile, chosen.model, chosen.lever_m)
+            .map(|pc| PoseClock { replaced, ..pc });
     };
     let (profile, mut model) = (chosen.profile, chosen.model);
     let last = mission.drift_resolved(&mut model, last);
@@ -276,6 +289,7 @@ pub fn pose_clock_model(
         first_offset: (last.theta[0], first_sigma_s),
         lever: (last.lever_m, last.lever_sigma_m),
         fit: Some(last),
+        replaced,
     })
 }
 
@@ -393,6 +407,19 @@ impl Lead {
             })
             .map(|(f, _)| (f.theta[0] - reported.theta[0]).abs() / 2.0)
             .fold(0.0, f64::max)
+    }
+}
+
+/// Whether the lead search runs on a mission whose windows chose `model` (`forced`: the user's
+/// model, if any): on a constant clock, and on a step the windows chose themselves — a walking
+/// robot's windows started a lead away from the truth settle in the gait's basins along the
+/// valley, a second apart, and read as a step; a constant from the search replaces it only
+/// when the profile measured from there chooses a constant too (a true step stays a step).
+fn lead_searched(model: OffsetModel, forced: Option<OffsetModel>) -> bool {
+    match model {
+        OffsetModel::Constant => true,
+        OffsetModel::Piecewise => forced.is_none(),
+        OffsetModel::Linear => false,
     }
 }
 
@@ -717,6 +744,7 @@ impl Mission<'_, '_> {
             profile,
             model,
             lever: (lever_m, None),
+            replaced: None,
         })
     }
 
@@ -1187,6 +1215,22 @@ mod tests {
             0.0,
         );
         assert!(close(m.drift_sigma_ppm.unwrap(), 5.0) && close(m.sigma_s, 0.004));
+    }
+
+    #[test]
+    fn the_lead_search_questions_a_constant_and_a_step_of_the_windows_own_not_a_drift_or_a_forced_model(
+    ) {
+        assert!(lead_searched(OffsetModel::Constant, None));
+        assert!(lead_searched(OffsetModel::Piecewise, None));
+        assert!(lead_searched(
+            OffsetModel::Constant,
+            Some(OffsetModel::Constant)
+        ));
+        assert!(!lead_searched(
+            OffsetModel::Piecewise,
+            Some(OffsetModel::Piecewise)
+        ));
+        assert!(!lead_searched(OffsetModel::Linear, None));
     }
 
     #[test]
