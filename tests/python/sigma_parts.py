@@ -28,7 +28,7 @@ GAUSSIAN_MEDIAN = 0.6745
 
 
 def with_hidden(p, s):
-    return math.hypot(s, p["hidden_drift_s"], p.get("valley_s", 0.0))
+    return math.hypot(s, p["hidden_drift_s"], p.get("valley_s", 0.0), p.get("basins_s", 0.0))
 
 
 RULES = {

@@ -152,6 +152,11 @@ pub struct SigmaParts {
     /// worse (the lead search, see the module doc), added in quadrature (0 otherwise).
     #[serde(default)]
     pub valley_s: f64,
+    /// Half the spread of windows that stepped out and back between two basins, read as one
+    /// constant clock ([`crate::align::clock_model::ClockModel::alternation_s`]), added in
+    /// quadrature (0 otherwise).
+    #[serde(default)]
+    pub basins_s: f64,
     pub combined: SigmaCombination,
 }
 
@@ -795,6 +800,7 @@ fn set_parameters(
         windows_s,
         hidden_drift_s: 0.0,
         valley_s: 0.0,
+        basins_s: 0.0,
         combined,
     };
     // An offset over the windows inside `span`: its σ and what it was made of.
@@ -835,6 +841,7 @@ fn set_parameters(
             Some(SigmaParts {
                 hidden_drift_s: hidden,
                 valley_s,
+                basins_s,
                 ..parts
             })
         }
@@ -1290,5 +1297,24 @@ mod tests {
         .unwrap();
         assert!(m.sigma_s > 0.215 && m.sigma_s < 0.2151, "{m:?}");
         assert_eq!(parts.valley_s, 0.215);
+        assert_eq!(parts.basins_s, 0.0);
+    }
+
+    #[test]
+    fn windows_in_two_basins_widen_the_constants_sigma_by_half_their_spread_and_say_so() {
+        let p = profile(|_| 0.1);
+        let mut m = ClockModel {
+            alternation_s: 0.5,
+            ..ClockModel::constant(0.0, 0.0, String::new())
+        };
+        let parts = set_parameters(
+            &mut m,
+            &fit(ClockShape::Constant, vec![0.1], vec![2e-3]),
+            &p,
+            0.0,
+        )
+        .unwrap();
+        assert!(m.sigma_s > 0.25 && m.sigma_s < 0.2501, "{m:?}");
+        assert_eq!((parts.basins_s, parts.valley_s), (0.25, 0.0));
     }
 }
