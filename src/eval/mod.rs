@@ -479,10 +479,16 @@ fn accepted_offset(
     } = searched;
     let posed = match est.trajectory.orientations.as_deref() {
         Some(q) if config.pose_fit() => {
-            let pose_from = |start: &OffsetEstimate| {
-                pose_over_time(config, params, pair, q, start, &methods, &est.name, t0_ns)
+            use crate::align::pose_fit::{JACOBIAN_PERIODS, NARROW_JACOBIAN_PERIODS};
+            let attempt = |jacobian_periods: f64| {
+                let pose_from = |start: &OffsetEstimate| {
+                    let fit = (q, jacobian_periods);
+                    pose_over_time(config, params, pair, fit, start, &methods, &est.name, t0_ns)
+                };
+                pose_from(o).or_else(|| pose_from_another_answer(o, &methods, pose_from))
             };
-            pose_from(o).or_else(|| pose_from_another_answer(o, &methods, pose_from))
+            // The narrow Jacobian only where the default cannot make the fit (see its doc).
+            attempt(JACOBIAN_PERIODS).or_else(|| attempt(NARROW_JACOBIAN_PERIODS))
         }
         _ => None,
     };
@@ -707,16 +713,18 @@ fn drift_report(r: &DriftErrorResult, t0_s: f64) -> DriftErrorReport {
 }
 
 /// The clock model from the pose fit ([`crate::align::pose_model`]) around the signal searches'
-/// answer `o` (the other confident searches' answers in `methods` widen its lead search): the
-/// report's fields, the warnings of a non-constant model chosen from the data, the note for the
-/// reason, and the `pose` entry of `methods`. `None` when the fit cannot be made (the
-/// signal searches' profile is used instead).
+/// answer `o` (the other confident searches' answers in `methods` widen its lead search), on the
+/// estimate's `orientations` with the Newton Jacobian `jacobian_periods` wide
+/// ([`crate::align::pose_fit::PoseFitParams::jacobian_periods`]; the note says when it is not the
+/// default): the report's fields, the warnings of a non-constant model chosen from the data, the
+/// note for the reason, and the `pose` entry of `methods`. `None` when the fit cannot be made
+/// (the signal searches' profile is used instead).
 #[allow(clippy::too_many_arguments)]
 fn pose_over_time(
     config: &EvalConfig,
     params: &crate::align::time_offset::OffsetParams,
     pair: &Pair<'_>,
-    orientations: &[nalgebra::UnitQuaternion<f64>],
+    (orientations, jacobian_periods): (&[nalgebra::UnitQuaternion<f64>], f64),
     o: &OffsetEstimate,
     methods: &[OffsetMethodReport],
     name: &str,
@@ -729,7 +737,8 @@ fn pose_over_time(
         .collect();
     let gap_s = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
     let jumps = crate::align::jumps::jumps(pair.estimate.0, pair.estimate.1, gap_s);
-    let data = pose_data(pair, orientations, &jumps, gap_s);
+    let mut data = pose_data(pair, orientations, &jumps, gap_s);
+    data.params.jacobian_periods = jacobian_periods;
     // The speed signals locate a step's time when the positions do not (computed already by
     // `auto`; otherwise only when asked).
     let speed = std::cell::OnceCell::new();
@@ -766,7 +775,14 @@ fn pose_over_time(
         sigma_parts: pc.sigma_parts,
         ..model_report(model, &pc.profile, t0_s)
     };
-    Some((report, warnings, pose_note(&pc), pose_entry(&pc)))
+    let mut note = pose_note(&pc);
+    if jacobian_periods < crate::align::pose_fit::JACOBIAN_PERIODS {
+        note.push_str(&format!(
+            "; Newton stepped on a Jacobian {jacobian_periods:.0} of the estimate's periods beyond the differences, not the default {:.0}, with which the fit could not be made (over that reach a gait's bob can turn it negative)",
+            crate::align::pose_fit::JACOBIAN_PERIODS
+        ));
+    }
+    Some((report, warnings, note, pose_entry(&pc)))
 }
 
 /// What the pose fit works on: the pair's positions, the estimate's `orientations` and `jumps`, its

@@ -190,6 +190,10 @@ pub type Signals<'a> = &'a dyn Fn() -> Option<(SignalView<'a>, SignalView<'a>)>;
 /// searches' answer; the other confident searches' answers `other_answers_s` widen the lead
 /// search); `None` when the fit cannot be made (too few windows, no convergence, or an answer
 /// farther than [`MAX_DISAGREEMENT_S`] from the start that the lead search did not find).
+///
+/// The Newton Jacobian is `data.params.jacobian_periods` wide; a caller whose fit cannot be made
+/// may try [`pose_fit::NARROW_JACOBIAN_PERIODS`] (a gait the default's differences answer with
+/// the wrong sign leaves Newton no step), and says so.
 pub fn pose_clock_model(
     data: &PoseData<'_>,
     start_s: f64,

@@ -100,6 +100,16 @@ pub use window::{locate_change, windows, Window};
 /// Length of a window, seconds (a window holds at least [`MIN_WINDOW_SAMPLES`] reference samples:
 /// longer at low reference rates).
 pub const WINDOW_S: f64 = 20.0;
+/// The Newton Jacobian's differences reach this many of the estimate's periods beyond the
+/// instrument's (mostly other samples than its, so nearly free of the bias its own noise gives
+/// Σ v·v; see `window.rs`).
+pub const JACOBIAN_PERIODS: f64 = 2.0;
+/// The Jacobian's reach where the fit cannot be made with [`JACOBIAN_PERIODS`]: over ±(h + 2
+/// periods) a 20 Hz estimate's differences answer a gait's 3.3–6.7 Hz bob and pitch with the
+/// wrong sign, the Jacobian turns negative in every window, and Newton cannot step (one period
+/// answers them with the right sign; everywhere it moved other missions between basins:
+/// docs/evidence.md, "The Jacobian's stencil, narrower: tried, reverted").
+pub const NARROW_JACOBIAN_PERIODS: f64 = 1.0;
 /// The fewest reference samples in a window.
 pub const MIN_WINDOW_SAMPLES: usize = 20;
 /// A window's scale follows its own data only as far as its positions spread more than this per
@@ -244,6 +254,10 @@ pub struct PoseFitParams {
     /// [`VEHICLE_SCALE_PRIOR_M`]: `align::pose_model::scale_prior_m` chooses by the reference's
     /// speed).
     pub scale_prior_m: f64,
+    /// How many of the estimate's periods wider than the instrument's the Newton Jacobian's
+    /// central differences reach ([`JACOBIAN_PERIODS`], or [`NARROW_JACOBIAN_PERIODS`] where
+    /// the fit cannot be made with it: see `align::pose_model::pose_clock_model`).
+    pub jacobian_periods: f64,
 }
 
 impl PoseFitParams {
@@ -257,6 +271,7 @@ impl PoseFitParams {
             max_gap_s,
             window_s: None,
             scale_prior_m: SCALE_PRIOR_M,
+            jacobian_periods: JACOBIAN_PERIODS,
         }
     }
 }

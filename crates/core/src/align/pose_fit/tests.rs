@@ -99,6 +99,20 @@ impl Sim {
         self
     }
 
+    /// The body bobbing `amp_m` up and down at `hz` (a walking robot's gait), seen by both
+    /// sensors; `dt_s` the estimate's constant offset (its stamps are true time less it).
+    fn bobbing(mut self, amp_m: f64, hz: f64, dt_s: f64) -> Sim {
+        let bob = |t: f64| Vector3::z() * amp_m * (std::f64::consts::TAU * hz * t).sin();
+        for (t, p) in self.ref_t.iter().zip(&mut self.ref_p) {
+            *p += bob(*t);
+        }
+        // The estimate's frame turns about z only and scales by 1.02 (see `new`).
+        for (t, p) in self.t.iter().zip(&mut self.p) {
+            *p += bob(*t + dt_s) * 1.02;
+        }
+        self
+    }
+
     fn data(&self) -> PoseData<'_> {
         PoseData {
             ref_t: &self.ref_t,
@@ -137,6 +151,67 @@ fn recovers_offset_and_lever_on_a_noise_free_mission() {
     let want = Vector3::new(lever.x, lever.y, 0.0) * 1.02;
     assert!((f.lever_m - want).norm() < 0.01, "{:?}", f.lever_m);
     assert!(f.converged);
+}
+
+/// A walking robot at 0.3–0.5 m/s whose body bobs 1.5 cm at 4.5 Hz (twice a trot), seen by a 20 Hz
+/// estimate: with the Newton Jacobian's difference two periods wider than the instrument's (the
+/// default, ±150 ms, whose response to 3.3–6.7 Hz is negative) J = Σ v·w is negative in the
+/// windows at the true offset and lever — a shift in time along a steady walk is mostly a
+/// translation, which each window's similarity takes up, so the bob decides J's sign — and Newton
+/// steps away from the truth (here into a basin 0.43 s off, which the clock model rejects as
+/// another basin); one period wider ([`NARROW_JACOBIAN_PERIODS`], the fallback where the default
+/// cannot make the fit) J is positive in every window and the fit recovers the offset.
+#[test]
+fn a_gait_bob_at_20_hz_turns_the_default_jacobian_negative_and_the_narrow_one_holds() {
+    let dt_true = 0.137;
+    let lever = Vector3::new(0.2, 0.1, 0.3);
+    let sim = Sim::new(&|_| dt_true, &|t| 0.4 + 0.1 * (0.21 * t).sin(), lever)
+        .bobbing(0.015, 4.5, dt_true);
+    let jacobians = |data: &PoseData<'_>| -> Vec<f64> {
+        let problem = data.problem();
+        let d = lever * 1.02;
+        data.windows()
+            .iter()
+            .filter_map(|w| {
+                let t =
+                    problem.terms(w, &ClockShape::Constant, &[dt_true], &d, false, 1.0 / 1.02)?;
+                Some(t.j[(0, 0)])
+            })
+            .collect()
+    };
+    let default = sim.data();
+    assert_eq!(default.params.jacobian_periods, JACOBIAN_PERIODS);
+    let j = jacobians(&default);
+    assert!(
+        j.len() >= 4 && j.iter().filter(|&&j| j < 0.0).count() >= j.len() - 1,
+        "{j:?}"
+    );
+    let w = default.windows();
+    let f = fit(
+        &default,
+        &w,
+        ClockShape::Constant,
+        vec![dt_true + 0.03],
+        Vector3::zeros(),
+        true,
+    );
+    assert!(
+        f.as_ref()
+            .is_none_or(|f| !f.converged || (f.theta[0] - dt_true).abs() > 0.1),
+        "{:?}",
+        f.map(|f| f.theta)
+    );
+    let narrow = PoseData {
+        params: PoseFitParams {
+            jacobian_periods: NARROW_JACOBIAN_PERIODS,
+            ..default.params
+        },
+        ..sim.data()
+    };
+    let j = jacobians(&narrow);
+    assert!(j.len() >= 4 && j.iter().all(|&j| j > 0.0), "{j:?}");
+    let f = constant_from(&narrow, &narrow.windows(), dt_true + 0.03);
+    assert!((f.theta[0] - dt_true).abs() < 1e-3, "{:?}", f.theta);
 }
 
 /// Two position jumps of the estimate inside windows (0.8 m and 0.4 m) are two new frames, not

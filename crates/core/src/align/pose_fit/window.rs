@@ -713,7 +713,7 @@ impl<'a> PoseData<'a> {
             ref_p: self.ref_p,
             sampler: Sampler::new(self.estimate, self.params.max_gap_s),
             h: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S),
-            hw: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S) + 2.0 * period,
+            hw: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S) + self.params.jacobian_periods * period,
             scale_prior_m: self.params.scale_prior_m,
         }
     }
