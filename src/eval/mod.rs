@@ -447,7 +447,14 @@ fn searched_offset(
             accepted_offset(config, &params, &pair, est, t0_ns, &o, searched)
         }
         Some(Err(e @ Error::NoOverlap { .. })) => return Err(clone_no_overlap(e, &est.label)),
-        Some(Ok(o)) => weak_offset(config, est, Some(&o), searched),
+        Some(Ok(o)) => match auto
+            .is_some()
+            .then(|| pose_rescued(config, &params, &pair, est, t0_ns, &o, &searched))
+            .flatten()
+        {
+            Some(rescued) => rescued,
+            None => weak_offset(config, est, Some(&o), searched),
+        },
         _ => weak_offset(config, est, None, searched),
     };
     // The signal searches' lever warnings say "measure the lever": the pose fit did, and the Δt it
@@ -477,23 +484,15 @@ fn accepted_offset(
         reason,
         implied_lever,
     } = searched;
-    let posed = match est.trajectory.orientations.as_deref() {
-        Some(q) if config.pose_fit() => {
-            use crate::align::pose_fit::{JACOBIAN_PERIODS, NARROW_JACOBIAN_PERIODS};
-            let attempt = |jacobian_periods: f64| {
-                let pose_from = |start: &OffsetEstimate| {
-                    let fit = (q, jacobian_periods);
-                    pose_over_time(config, params, pair, fit, start, &methods, &est.name, t0_ns)
-                };
-                pose_from(o).or_else(|| pose_from_another_answer(o, &methods, pose_from))
-            };
-            // The narrow Jacobian only where the default cannot make the fit (see its doc).
-            attempt(JACOBIAN_PERIODS).or_else(|| attempt(NARROW_JACOBIAN_PERIODS))
-        }
-        _ => None,
-    };
+    let posed = pose_refined(config, params, pair, est, t0_ns, o, &methods);
     let (report, w, method, reason) = match posed {
-        Some((report, w, note, entry)) => {
+        Some(Posed {
+            report,
+            warnings: w,
+            note,
+            entry,
+            ..
+        }) => {
             methods.push(entry);
             (report, w, OffsetMethod::Pose, format!("{reason}; {note}"))
         }
@@ -515,6 +514,105 @@ fn accepted_offset(
         ..report
     };
     (report, w)
+}
+
+/// The pose fit around the answer `o` (under `auto`, when the estimate has orientations): from `o`,
+/// else from another search's answer (`pose_from_another_answer`); with the default Newton
+/// Jacobian, else the narrow one where the default cannot make the fit (see
+/// [`crate::align::pose_fit::NARROW_JACOBIAN_PERIODS`]).
+fn pose_refined(
+    config: &EvalConfig,
+    params: &crate::align::time_offset::OffsetParams,
+    pair: &Pair<'_>,
+    est: &Loaded,
+    t0_ns: i64,
+    o: &OffsetEstimate,
+    methods: &[OffsetMethodReport],
+) -> Option<Posed> {
+    use crate::align::pose_fit::{JACOBIAN_PERIODS, NARROW_JACOBIAN_PERIODS};
+    let q = est.trajectory.orientations.as_deref()?;
+    if !config.pose_fit() {
+        return None;
+    }
+    let attempt = |jacobian_periods: f64| {
+        let pose_from = |start: &OffsetEstimate| {
+            let fit = (q, jacobian_periods);
+            pose_over_time(config, params, pair, fit, start, methods, &est.name, t0_ns)
+        };
+        pose_from(o).or_else(|| pose_from_another_answer(o, methods, pose_from))
+    };
+    attempt(JACOBIAN_PERIODS).or_else(|| attempt(NARROW_JACOBIAN_PERIODS))
+}
+
+/// No search was confident enough to be applied (`weak`, the best answer): the pose fit started
+/// from each search's answer (on near-straight paths the speed search was within a few
+/// milliseconds where its peak was too flat to be confident, and the curvature searches there are
+/// noise; on walking robots a confident speed search matched at a wrong lag contradicts signed
+/// curvature's lead). A fit counts when it converged with its lever (its σ has its parts), tells
+/// the forward lever from Δt (at a constant speed nothing does, and the answer stays weak), and
+/// stayed within [`MAX_DISAGREEMENT_S`] of its start or the lead search, which judges the basins
+/// it compares on every window, moved it; of those, the one with the least mean squared residual
+/// over its windows is applied, the reason saying where it started. `None` when none counts.
+///
+/// [`MAX_DISAGREEMENT_S`]: crate::align::pose_model::MAX_DISAGREEMENT_S
+fn pose_rescued(
+    config: &EvalConfig,
+    params: &crate::align::time_offset::OffsetParams,
+    pair: &Pair<'_>,
+    est: &Loaded,
+    t0_ns: i64,
+    weak: &OffsetEstimate,
+    searched: &Searched,
+) -> Option<(TimeOffsetReport, Vec<Warning>)> {
+    use crate::align::pose_model::MAX_DISAGREEMENT_S;
+    let mut starts: Vec<(OffsetMethod, f64)> = Vec::new();
+    for m in &searched.methods {
+        match m.offset_s {
+            Some(offset_s)
+                if m.status != MethodStatus::Failed
+                    && offset_s.is_finite()
+                    && !starts
+                        .iter()
+                        .any(|(_, s)| (s - offset_s).abs() <= MAX_DISAGREEMENT_S) =>
+            {
+                starts.push((m.method, offset_s))
+            }
+            _ => {}
+        }
+    }
+    let (method, offset_s, posed) = starts
+        .into_iter()
+        .filter_map(|(method, offset_s)| {
+            let start = OffsetEstimate {
+                method,
+                offset_s,
+                status: OffsetStatus::Ok,
+                ..*weak
+            };
+            let posed = pose_refined(config, params, pair, est, t0_ns, &start, &searched.methods)?;
+            let near = (posed.report.offset_s - offset_s).abs() <= MAX_DISAGREEMENT_S;
+            let separable = posed.report.fitted_forward_separable == Some(true);
+            (posed.report.sigma_parts.is_some() && separable && (near || posed.lead_moved))
+                .then_some((method, offset_s, posed))
+        })
+        .min_by(|a, b| a.2.mse_m2.total_cmp(&b.2.mse_m2))?;
+    let mut methods = searched.methods.clone();
+    methods.push(posed.entry);
+    let report = TimeOffsetReport {
+        method: OffsetMethod::Pose.into(),
+        applied_s: posed.report.offset_s,
+        correlation: Some(weak.correlation),
+        confidence: Some(weak.confidence),
+        status: TimeOffsetStatus::Ok,
+        methods,
+        reason: Some(format!(
+            "{}; but the pose fit started from {method}'s answer ({offset_s:+.3} s) converged with its lever and fits the windows best of the searches' answers: {}",
+            searched.reason, posed.note
+        )),
+        implied_lever_arm_m: searched.implied_lever,
+        ..posed.report
+    };
+    Some((report, posed.warnings))
 }
 
 /// The pose fit from another confident search's answer, when it could not be made from the one
@@ -539,20 +637,32 @@ fn pose_from_another_answer(
                 offset_s,
                 ..*o
             };
-            let (report, w, note, entry) = pose_from(&start)?;
-            report.sigma_parts.is_some().then(|| {
-                let note = format!(
-                    "the pose fit could not be made from {}'s answer and started from {}'s ({:+.3} s): {note}",
-                    o.method, method, offset_s
-                );
-                (report, w, note, entry)
+            let posed = pose_from(&start)?;
+            posed.report.sigma_parts.is_some().then(|| Posed {
+                note: format!(
+                    "the pose fit could not be made from {}'s answer and started from {}'s ({:+.3} s): {}",
+                    o.method, method, offset_s, posed.note
+                ),
+                ..posed
             })
         })
 }
 
-/// What the pose fit gives the report: its fields, the warnings of a non-constant model, the note
-/// for the reason, and the `pose` entry of `methods`.
-type Posed = (TimeOffsetReport, Vec<Warning>, String, OffsetMethodReport);
+/// What the pose fit gives the report, and what tells two fits from different starts apart.
+struct Posed {
+    /// The report's fields.
+    report: TimeOffsetReport,
+    /// The warnings of a non-constant model.
+    warnings: Vec<Warning>,
+    /// The note for the reason.
+    note: String,
+    /// The `pose` entry of `methods`.
+    entry: OffsetMethodReport,
+    /// The final fit's mean squared residual over its windows, m² (∞ without a final fit).
+    mse_m2: f64,
+    /// Whether the lead search moved the answer from the basin of the start.
+    lead_moved: bool,
+}
 
 /// The answers of the confident searches in `methods` other than `except`: (method, Δt).
 fn confident_answers(
@@ -782,7 +892,17 @@ fn pose_over_time(
             crate::align::pose_fit::JACOBIAN_PERIODS
         ));
     }
-    Some((report, warnings, note, pose_entry(&pc)))
+    let mse_m2 = pc.fit.as_ref().map_or(f64::INFINITY, |f| {
+        f.rms_m.iter().map(|r| r * r).sum::<f64>() / f.rms_m.len().max(1) as f64
+    });
+    Some(Posed {
+        report,
+        warnings,
+        note,
+        entry: pose_entry(&pc),
+        mse_m2,
+        lead_moved: pc.replaced.is_some(),
+    })
 }
 
 /// What the pose fit works on: the pair's positions, the estimate's `orientations` and `jumps`, its

@@ -140,6 +140,32 @@ fn a_step_is_found_where_windows_settle_in_another_basin() {
     }
 }
 
+/// A near-straight mission where no search is confident (its speed varies too little for a clear
+/// peak, its turns too few for curvature): the pose fit from the searches' answers tells the
+/// forward lever from Δt, and its answer is applied with a σ that covers its error.
+#[test]
+fn a_weak_search_is_rescued_by_the_pose_fit_where_it_tells_the_lever_from_the_offset() {
+    let grades = validate_missions(
+        &ValidateOptions {
+            kinds: vec![MissionKind::NearStraight],
+            per_kind: 1,
+            first_seed: 34,
+        },
+        &|_, _| {},
+    );
+    let g = &grades[0];
+    let what = format!(
+        "near_straight 34: {:?} {:?} {:?}",
+        g.status, g.error_s, g.sigma_s
+    );
+    assert_eq!(g.status, Some(TimeOffsetStatus::Ok), "{what}");
+    let (e, sigma) = (g.error_s.unwrap(), g.sigma_s.unwrap());
+    assert!(
+        e.abs() <= 0.010 && e.abs() <= 2.0 * sigma && sigma <= 0.050,
+        "{what}"
+    );
+}
+
 #[test]
 fn validate_command_prints_the_table_and_writes_grades() {
     let dir = std::env::temp_dir().join(format!("trajdrift-validate-{}", std::process::id()));
