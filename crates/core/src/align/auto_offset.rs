@@ -16,7 +16,9 @@
 //! the reference's stands left out (`crate::align::still`): a turn in place seen by a sensor beside
 //! the reference point otherwise fakes a lead of several tenths of a second. Signed curvature alone
 //! is applied with a `lever_arm_unchecked` warning (speed cannot rule the lead out). Nothing
-//! confident: `weak`.
+//! confident: `weak` (the evaluation then starts the pose fit from each answer, where the estimate
+//! has orientations, and applies it where the positions decide: `pose_rescued` in the `trajdrift`
+//! crate's `eval`).
 
 use nalgebra::Vector3;
 

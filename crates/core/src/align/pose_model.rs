@@ -193,7 +193,7 @@ pub type Signals<'a> = &'a dyn Fn() -> Option<(SignalView<'a>, SignalView<'a>)>;
 ///
 /// The Newton Jacobian is `data.params.jacobian_periods` wide; a caller whose fit cannot be made
 /// may try [`pose_fit::NARROW_JACOBIAN_PERIODS`] (a gait the default's differences answer with
-/// the wrong sign leaves Newton no step), and says so.
+/// the wrong sign sends Newton away from the truth), and says so.
 pub fn pose_clock_model(
     data: &PoseData<'_>,
     start_s: f64,

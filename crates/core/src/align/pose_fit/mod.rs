@@ -106,9 +106,9 @@ pub const WINDOW_S: f64 = 20.0;
 pub const JACOBIAN_PERIODS: f64 = 2.0;
 /// The Jacobian's reach where the fit cannot be made with [`JACOBIAN_PERIODS`]: over ±(h + 2
 /// periods) a 20 Hz estimate's differences answer a gait's 3.3–6.7 Hz bob and pitch with the
-/// wrong sign, the Jacobian turns negative in every window, and Newton cannot step (one period
-/// answers them with the right sign; everywhere it moved other missions between basins:
-/// docs/evidence.md, "The Jacobian's stencil, narrower: tried, reverted").
+/// wrong sign, the Jacobian turns negative in the windows, and Newton steps away from the truth
+/// (one period answers them with the right sign; everywhere it moved other missions between
+/// basins: docs/evidence.md, "The Jacobian's stencil, narrower: tried, reverted").
 pub const NARROW_JACOBIAN_PERIODS: f64 = 1.0;
 /// The fewest reference samples in a window.
 pub const MIN_WINDOW_SAMPLES: usize = 20;
@@ -255,8 +255,8 @@ pub struct PoseFitParams {
     /// speed).
     pub scale_prior_m: f64,
     /// How many of the estimate's periods wider than the instrument's the Newton Jacobian's
-    /// central differences reach ([`JACOBIAN_PERIODS`], or [`NARROW_JACOBIAN_PERIODS`] where
-    /// the fit cannot be made with it: see `align::pose_model::pose_clock_model`).
+    /// central differences reach ([`JACOBIAN_PERIODS`]; the evaluation tries
+    /// [`NARROW_JACOBIAN_PERIODS`] where the fit cannot be made with it).
     pub jacobian_periods: f64,
 }
 

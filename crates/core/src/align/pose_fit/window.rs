@@ -53,8 +53,9 @@ pub(super) struct Terms {
     /// from central differences over ±h, whose noise is uncorrelated with the point's own although
     /// they share samples where h is a whole number of periods: see [`STENCIL_MIN_S`]); h = Σ v·v
     /// (the formal σ's middle); j = Σ v·w with w the same derivative over two of the estimate's
-    /// periods more (mostly other samples than v's; the cubics at the ends share one or two): the
-    /// Newton Jacobian of g, nearly free of the bias Σ v·v takes from v's noise, which steps the
+    /// periods more (`PoseFitParams::jacobian_periods`; one where the fit cannot be made with
+    /// two), mostly other samples than v's (the cubics at the ends share one or two): the Newton
+    /// Jacobian of g, nearly free of the bias Σ v·v takes from v's noise, which steps the
     /// fits (the error bar measures the clock columns instead: `SharedFit::jacobians`). The
     /// window's similarity and drift eliminated (Schur complement).
     pub(super) h: DMatrix<f64>,
@@ -80,7 +81,8 @@ pub(super) struct Problem<'a> {
     ref_p: &'a [Vector3<f64>],
     sampler: Sampler<'a>,
     /// The half-steps of the central differences for ∂u/∂Δt, seconds (see [`Terms`]): the
-    /// instrument's, and the Jacobian's (two of the estimate's periods more: mostly other samples).
+    /// instrument's, and the Jacobian's (`jacobian_periods` of the estimate's periods more: mostly
+    /// other samples).
     h: f64,
     hw: f64,
     /// The windows' scale prior, metres of spread per sample
