@@ -484,7 +484,16 @@ fn accepted_offset(
         reason,
         implied_lever,
     } = searched;
-    let posed = pose_refined(config, params, pair, est, t0_ns, o, &methods);
+    let posed = pose_refined(
+        config,
+        params,
+        pair,
+        est,
+        t0_ns,
+        o,
+        &methods,
+        Starts::AnswerThenOthers,
+    );
     let (report, w, method, reason) = match posed {
         Some(Posed {
             report,
@@ -516,10 +525,19 @@ fn accepted_offset(
     (report, w)
 }
 
-/// The pose fit around the answer `o` (under `auto`, when the estimate has orientations): from `o`,
-/// else from another search's answer (`pose_from_another_answer`); with the default Newton
-/// Jacobian, else the narrow one where the default cannot make the fit (see
-/// [`crate::align::pose_fit::NARROW_JACOBIAN_PERIODS`]).
+/// Where the pose fit may start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Starts {
+    /// From the answer given, else from another confident search's (`pose_from_another_answer`).
+    AnswerThenOthers,
+    /// From the answer given only (the caller tries the others itself).
+    AnswerOnly,
+}
+
+/// The pose fit around the answer `o` (under `auto`, when the estimate has orientations), from
+/// where `starts` allows; with the default Newton Jacobian, else the narrow one where the default
+/// cannot make the fit (see [`crate::align::pose_fit::NARROW_JACOBIAN_PERIODS`]).
+#[allow(clippy::too_many_arguments)]
 fn pose_refined(
     config: &EvalConfig,
     params: &crate::align::time_offset::OffsetParams,
@@ -528,6 +546,7 @@ fn pose_refined(
     t0_ns: i64,
     o: &OffsetEstimate,
     methods: &[OffsetMethodReport],
+    starts: Starts,
 ) -> Option<Posed> {
     use crate::align::pose_fit::{JACOBIAN_PERIODS, NARROW_JACOBIAN_PERIODS};
     let q = est.trajectory.orientations.as_deref()?;
@@ -539,7 +558,10 @@ fn pose_refined(
             let fit = (q, jacobian_periods);
             pose_over_time(config, params, pair, fit, start, methods, &est.name, t0_ns)
         };
-        pose_from(o).or_else(|| pose_from_another_answer(o, methods, pose_from))
+        pose_from(o).or_else(|| match starts {
+            Starts::AnswerThenOthers => pose_from_another_answer(o, methods, pose_from),
+            Starts::AnswerOnly => None,
+        })
     };
     attempt(JACOBIAN_PERIODS).or_else(|| attempt(NARROW_JACOBIAN_PERIODS))
 }
@@ -589,7 +611,16 @@ fn pose_rescued(
                 status: OffsetStatus::Ok,
                 ..*weak
             };
-            let posed = pose_refined(config, params, pair, est, t0_ns, &start, &searched.methods)?;
+            let posed = pose_refined(
+                config,
+                params,
+                pair,
+                est,
+                t0_ns,
+                &start,
+                &searched.methods,
+                Starts::AnswerOnly,
+            )?;
             let near = (posed.report.offset_s - offset_s).abs() <= MAX_DISAGREEMENT_S;
             let separable = posed.report.fitted_forward_separable == Some(true);
             (posed.report.sigma_parts.is_some() && separable && (near || posed.lead_moved))
