@@ -40,7 +40,9 @@
 //! [`MAX_DISAGREEMENT_S`] (the robot is [`walking`]),
 //! Δt is scanned from the lead before the earliest confident search's answer to the lead after the
 //! latest, the lever solved at each candidate ([`pose_fit::coarse_minima`]); constant fits start
-//! from the scan's best minima (with the lever found there, else none) and compete with the near
+//! from the scan's best minima (with the lever found there, else none; one that leaves its
+//! minimum's basin is made again on [`pose_fit::NARROW_JACOBIAN_PERIODS`], as a gait's bob can
+//! turn the default Jacobian negative) and compete with the near
 //! fit on their residual per point over every window. The best replaces the near fit when the
 //! profile measured from it chooses a constant clock too (only then: across a clock step the
 //! constant trades its lever for Δt as well, and the other segment's basin fits better). Where
@@ -482,7 +484,14 @@ fn lead_search(
     );
     // The fit from each minimum, its lever the scan's there, or none when that does not converge
     // (a lever settled on a sample of the windows can start the fit outside the basin).
-    let fit_from = |theta: f64, lever: Vector3<f64>| {
+    let narrow = PoseData {
+        params: pose_fit::PoseFitParams {
+            jacobian_periods: pose_fit::NARROW_JACOBIAN_PERIODS,
+            ..data.params
+        },
+        ..*data
+    };
+    let fit_in = |data: &PoseData<'_>, theta: f64, lever: Vector3<f64>| {
         pose_fit::fit(
             data,
             windows,
@@ -502,7 +511,17 @@ fn lead_search(
         .filter(|m| near.is_none_or(|n| (n.theta[0] - m.offset_s).abs() > SAME_BASIN_S))
         .take(LEAD_MINIMA)
         .filter_map(|m| {
-            fit_from(m.offset_s, m.lever_m).or_else(|| fit_from(m.offset_s, Vector3::zeros()))
+            let from = |data: &PoseData<'_>| {
+                fit_in(data, m.offset_s, m.lever_m)
+                    .or_else(|| fit_in(data, m.offset_s, Vector3::zeros()))
+            };
+            // A fit that leaves its minimum's basin (or does not converge) on a walking robot
+            // may have followed a Jacobian the gait turned negative: once more on the narrow one.
+            let stays = |f: &PoseFit| (f.theta[0] - m.offset_s).abs() <= SAME_BASIN_S;
+            match from(data) {
+                Some(f) if stays(&f) => Some(f),
+                other => from(&narrow).filter(stays).or(other),
+            }
         });
     let fits: Vec<PoseFit> = far.chain(near.cloned()).collect();
     // Windows a fit left out (a jump of the estimate) would weigh on every comparison.
