@@ -510,9 +510,24 @@ fn accepted_offset(
             (report, w, o.method, reason)
         }
     };
-    let report = TimeOffsetReport {
+    (
+        applied_report(report, method, o, methods, reason, implied_lever),
+        w,
+    )
+}
+
+/// `report` (the clock model's fields) as the applied answer of `method`: its offset applied, the
+/// searches' `methods`, the `reason`, and the peak of the search answer `o` it came from.
+fn applied_report(
+    report: TimeOffsetReport,
+    method: OffsetMethod,
+    o: &OffsetEstimate,
+    methods: Vec<OffsetMethodReport>,
+    reason: String,
+    implied_lever: Option<f64>,
+) -> TimeOffsetReport {
+    TimeOffsetReport {
         method: method.into(),
-        offset_s: report.offset_s,
         applied_s: report.offset_s,
         correlation: Some(o.correlation),
         confidence: Some(o.confidence),
@@ -521,8 +536,7 @@ fn accepted_offset(
         reason: Some(reason),
         implied_lever_arm_m: implied_lever,
         ..report
-    };
-    (report, w)
+    }
 }
 
 /// Where the pose fit may start.
@@ -629,20 +643,18 @@ fn pose_rescued(
         .min_by(|a, b| a.2.mse_m2.total_cmp(&b.2.mse_m2))?;
     let mut methods = searched.methods.clone();
     methods.push(posed.entry);
-    let report = TimeOffsetReport {
-        method: OffsetMethod::Pose.into(),
-        applied_s: posed.report.offset_s,
-        correlation: Some(weak.correlation),
-        confidence: Some(weak.confidence),
-        status: TimeOffsetStatus::Ok,
+    let reason = format!(
+        "{}; but the pose fit started from {method}'s answer ({offset_s:+.3} s) converged with its lever and fits the windows best of the searches' answers: {}",
+        searched.reason, posed.note
+    );
+    let report = applied_report(
+        posed.report,
+        OffsetMethod::Pose,
+        weak,
         methods,
-        reason: Some(format!(
-            "{}; but the pose fit started from {method}'s answer ({offset_s:+.3} s) converged with its lever and fits the windows best of the searches' answers: {}",
-            searched.reason, posed.note
-        )),
-        implied_lever_arm_m: searched.implied_lever,
-        ..posed.report
-    };
+        reason,
+        searched.implied_lever,
+    );
     Some((report, posed.warnings))
 }
 
