@@ -46,9 +46,10 @@
 //! fit on their residual per point over every window. The best replaces the near fit when the
 //! profile measured from it chooses a constant clock too (only then: across a clock step the
 //! constant trades its lever for Δt as well, and the other segment's basin fits better). Where
-//! another fit is not worse beyond [`LEAD_SIGNIFICANCE_T`] (a paired t over the windows'
-//! residuals: the windows are independent where the points are not), the data cannot tell the
-//! two apart, and the constant's σ adds half their distance in quadrature
+//! another fit (or the scan's minimum it started from, where that fits the windows better than
+//! the fit that climbed from it) is not worse beyond [`LEAD_SIGNIFICANCE_T`] (a paired t over
+//! the windows' residuals: the windows are independent where the points are not), the data
+//! cannot tell the two apart, and the constant's σ adds half their distance in quadrature
 //! (`sigma_parts.valley_s`). Measured on a second simulator's missions (docs/evidence.md, "A
 //! second simulator, and the lead search").
 //!
@@ -372,11 +373,18 @@ pub fn scale_prior_m(moving_speed_mps: Option<f64>) -> f64 {
 }
 
 /// What the lead search found: the fits along the forward lever's valley (the near one among
-/// them), each with its residual per point in every window of `windows` (the mission's, less
-/// those any of the fits left out as jumps).
+/// them) over `windows` (the mission's, less those any of the fits left out as jumps).
 struct Lead {
     windows: Vec<pose_fit::Window>,
-    fits: Vec<(PoseFit, Vec<Option<f64>>)>,
+    fits: Vec<LeadFit>,
+}
+
+/// A fit along the valley: its residual per point in every window of [`Lead::windows`], and the
+/// scan's minimum it started from (`None`: the near fit).
+struct LeadFit {
+    fit: PoseFit,
+    residuals: Vec<Option<f64>>,
+    from: Option<pose_fit::ScanMinimum>,
 }
 
 impl Lead {
@@ -384,7 +392,7 @@ impl Lead {
     /// when it is not in `near`'s basin.
     fn far(&self, near: Option<&PoseFit>) -> Option<PoseFit> {
         let shared: Vec<bool> = (0..self.windows.len())
-            .map(|k| self.fits.iter().all(|(_, r)| r[k].is_some()))
+            .map(|k| self.fits.iter().all(|f| f.residuals[k].is_some()))
             .collect();
         let mean = |r: &[Option<f64>]| {
             let (sum, n) = r
@@ -402,23 +410,77 @@ impl Lead {
         let best = self
             .fits
             .iter()
-            .min_by(|a, b| mean(&a.1).total_cmp(&mean(&b.1)))?;
-        (!near.is_some_and(|n| same_basin(n, &best.0))).then(|| best.0.clone())
+            .min_by(|a, b| mean(&a.residuals).total_cmp(&mean(&b.residuals)))?;
+        (!near.is_some_and(|n| same_basin(n, &best.fit))).then(|| best.fit.clone())
     }
 
     /// Half the largest distance from `reported`'s Δt to a fit the windows do not find worse beyond
     /// [`LEAD_SIGNIFICANCE_T`], seconds: how far along the valley the data leave Δt undecided (0
     /// when every other fit is worse).
+    ///
+    /// Where the scan's minimum a fit started from fits the windows better than the fit (and lies
+    /// outside `reported`'s basin), the minimum stands for it: a fit need not end where the
+    /// residual is least (its estimating equations weigh the points by the instrument, see
+    /// `pose_fit`), and where the gait's ripple is as deep as the valley is shallow (a 1 Hz
+    /// reference of a walking robot) a fit climbed 80 ms up the ripple from the minimum by the
+    /// truth to a residual a fifth higher; the minimum itself fits the windows as well as the fit
+    /// 0.4 s off that was reported, under a σ of 11 ms. The minimum is weighed as the scan found
+    /// it (Δt and the lever solved there) with `reported`'s scale. Only the fitted minima: the
+    /// scan's others, weighed too, are more chances for a worse one to pass the test (one mission
+    /// right within 1 ms went from σ 5 ms to 336 ms; docs/evidence.md).
     fn valley_s(&self, data: &PoseData<'_>, reported: &PoseFit) -> f64 {
         let residuals = pose_fit::window_residuals(data, &self.windows, reported);
-        self.fits
-            .iter()
-            .filter(|(f, r)| {
-                !same_basin(f, reported) && paired_t(r, &residuals) < LEAD_SIGNIFICANCE_T
-            })
-            .map(|(f, _)| (f.theta[0] - reported.theta[0]).abs() / 2.0)
-            .fold(0.0, f64::max)
+        let at_minimum = |m: &pose_fit::ScanMinimum| {
+            let at = PoseFit {
+                theta: vec![m.offset_s],
+                lever_m: m.lever_m,
+                ..reported.clone()
+            };
+            pose_fit::window_residuals(data, &self.windows, &at)
+        };
+        let candidates = self.candidates(reported.theta[0], at_minimum);
+        undecided_reach_s(reported.theta[0], &residuals, candidates)
     }
+
+    /// The valley's candidates against a fit at `at_s`: each fit's Δt and residuals, or the
+    /// minimum it started from (its residuals `at_minimum`) where that lies outside `at_s`'s basin
+    /// and fits the windows better than the fit.
+    fn candidates<'l>(
+        &'l self,
+        at_s: f64,
+        at_minimum: impl Fn(&pose_fit::ScanMinimum) -> Vec<Option<f64>> + 'l,
+    ) -> impl Iterator<Item = (f64, Vec<Option<f64>>)> + 'l {
+        self.fits.iter().map(move |f| {
+            let fitted = (f.fit.theta[0], f.residuals.clone());
+            f.from
+                .filter(|m| (m.offset_s - at_s).abs() > SAME_BASIN_S)
+                .map(|m| (m.offset_s, at_minimum(&m)))
+                .filter(|(_, r)| paired_t(r, &f.residuals) < 0.0)
+                .unwrap_or(fitted)
+        })
+    }
+}
+
+/// Half the largest distance from `at_s` (its windows' residuals `residuals`) to a candidate Δt
+/// outside its basin whose windows' residuals are not worse beyond [`LEAD_SIGNIFICANCE_T`],
+/// seconds (0 when every candidate is worse or in the basin).
+///
+/// ```text
+/// at 0.10 s; candidates 0.15 s (same basin), 0.50 s (as good), 0.90 s (worse in every window)
+///   → (0.50 − 0.10) / 2 = 0.20 s
+/// ```
+fn undecided_reach_s(
+    at_s: f64,
+    residuals: &[Option<f64>],
+    candidates: impl IntoIterator<Item = (f64, Vec<Option<f64>>)>,
+) -> f64 {
+    candidates
+        .into_iter()
+        .filter(|(t, r)| {
+            (t - at_s).abs() > SAME_BASIN_S && paired_t(r, residuals) < LEAD_SIGNIFICANCE_T
+        })
+        .map(|(t, _)| (t - at_s).abs() / 2.0)
+        .fold(0.0, f64::max)
 }
 
 /// Whether the lead search runs on a mission whose windows chose `model` (`forced`: the user's
@@ -522,23 +584,26 @@ fn lead_search(
                 Some(f) if stays(&f) => Some(f),
                 other => from(&narrow).filter(stays).or(other),
             }
+            .map(|f| (f, Some(m)))
         });
-    let fits: Vec<PoseFit> = far.chain(near.cloned()).collect();
+    let fits: Vec<(PoseFit, Option<pose_fit::ScanMinimum>)> =
+        far.chain(near.cloned().map(|f| (f, None))).collect();
     // Windows a fit left out (a jump of the estimate) would weigh on every comparison.
     let kept: Vec<pose_fit::Window> = windows
         .iter()
         .filter(|w| {
             !fits
                 .iter()
-                .any(|f| f.outliers.iter().any(|o| o.t_start == w.t_start))
+                .any(|(f, _)| f.outliers.iter().any(|o| o.t_start == w.t_start))
         })
         .cloned()
         .collect();
     let fits = fits
         .into_iter()
-        .map(|f| {
-            let r = pose_fit::window_residuals(data, &kept, &f);
-            (f, r)
+        .map(|(fit, from)| LeadFit {
+            residuals: pose_fit::window_residuals(data, &kept, &fit),
+            fit,
+            from,
         })
         .collect();
     Some(Lead {
@@ -1289,11 +1354,18 @@ mod tests {
         // The far fit is the best on the windows every fit has, unless it is in the near basin.
         let lead = Lead {
             windows: Vec::new(),
-            fits: vec![
+            fits: [
                 (at(0.43), shifted(0.005, 0.1)),
                 (at(0.9), shifted(0.2, 0.01)),
                 (at(0.05), shifted(-0.001, 0.1)),
-            ],
+            ]
+            .into_iter()
+            .map(|(fit, residuals)| LeadFit {
+                fit,
+                residuals,
+                from: None,
+            })
+            .collect(),
         };
         let lead = Lead {
             windows: vec![
@@ -1308,6 +1380,48 @@ mod tests {
         };
         assert_eq!(lead.far(Some(&at(0.5))).map(|f| f.theta[0]), Some(0.05));
         assert!(lead.far(Some(&at(0.1))).is_none());
+        // The valley reaches to the farthest candidate as good, not to one in the basin or one
+        // worse in every window.
+        let reach = |c: Vec<(f64, Vec<Option<f64>>)>| undecided_reach_s(0.1, &base, c);
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+        assert!(close(
+            reach(vec![
+                (0.15, shifted(0.0, 0.1)),
+                (0.5, shifted(0.005, 0.1)),
+                (0.9, shifted(0.2, 0.01)),
+            ]),
+            0.2
+        ));
+        assert_eq!(reach(vec![(0.9, shifted(0.2, 0.01))]), 0.0);
+        assert!(close(reach(vec![(-0.7, shifted(-0.01, 0.1))]), 0.4));
+        // A fit that climbed from its minimum (0.5 s) to a worse residual (0.9 s): the minimum
+        // stands for it where it fits better and lies outside the basin; else the fit does.
+        let climbed = |from_s: f64| Lead {
+            windows: Vec::new(),
+            fits: vec![LeadFit {
+                fit: at(0.9),
+                residuals: shifted(0.2, 0.01),
+                from: Some(pose_fit::ScanMinimum {
+                    offset_s: from_s,
+                    cost_m2: 1.0,
+                    lever_m: Vector3::zeros(),
+                }),
+            }],
+        };
+        let as_good = |_: &pose_fit::ScanMinimum| shifted(0.005, 0.1);
+        let worse = |_: &pose_fit::ScanMinimum| shifted(0.3, 0.01);
+        let lead = climbed(0.5);
+        assert!(close(
+            undecided_reach_s(0.1, &base, lead.candidates(0.1, as_good)),
+            0.2
+        ));
+        assert_eq!(
+            undecided_reach_s(0.1, &base, lead.candidates(0.1, worse)),
+            0.0
+        );
+        let in_basin = climbed(0.15);
+        let c: Vec<_> = in_basin.candidates(0.1, as_good).collect();
+        assert_eq!(c[0].0, 0.9);
         // valley_s enters the constant's σ in quadrature and its parts.
         let p = profile(|_| 0.1);
         let mut m = ClockModel::constant(0.0, 0.0, String::new());
