@@ -17,7 +17,8 @@ use crate::align::auto_offset::auto_time_offset_of;
 use crate::align::auto_params::AutoParams;
 use crate::align::clock_model::{clock_model_of, OffsetModel};
 use crate::align::time_offset::{
-    estimate_time_offset_cached, OffsetEstimate, OffsetMethod, OffsetStatus, Pair, SignalCache,
+    estimate_time_offset_cached, OffsetEstimate, OffsetMethod, OffsetParams, OffsetStatus, Pair,
+    SignalCache,
 };
 use crate::clock::ClockCorrection;
 use crate::diag::{Warning, WarningCode};
@@ -374,6 +375,13 @@ fn searched_offset(
     let pair = Pair::new((ref_t, ref_p), (est_t, &est.trajectory.positions), &cache);
     let params = config.offset_params();
     let method = config.params.offset_method();
+    let search = OffsetSearch {
+        config,
+        params: &params,
+        pair: &pair,
+        est,
+        t0_ns,
+    };
     let mut warnings = Vec::new();
     // `auto` runs every method; a named method runs alone (only what it needs is computed).
     if let (Some(start), true) = (config.start_offset_s, est.trajectory.orientations.is_some()) {
@@ -394,9 +402,7 @@ fn searched_offset(
             defined_fraction: 1.0,
             sigma_s: None,
         };
-        return Ok(accepted_offset(
-            config, &params, &pair, est, t0_ns, &o, searched,
-        ));
+        return Ok(search.accepted_offset(&o, searched));
     }
     let auto = if method == OffsetMethod::Auto {
         Some(match auto_time_offset_of(&pair, &params) {
@@ -443,19 +449,17 @@ fn searched_offset(
         }
     };
     let (report, w) = match chosen {
-        Some(Ok(o)) if o.status == OffsetStatus::Ok => {
-            accepted_offset(config, &params, &pair, est, t0_ns, &o, searched)
-        }
+        Some(Ok(o)) if o.status == OffsetStatus::Ok => search.accepted_offset(&o, searched),
         Some(Err(e @ Error::NoOverlap { .. })) => return Err(clone_no_overlap(e, &est.label)),
         Some(Ok(o)) => match auto
             .is_some()
-            .then(|| pose_rescued(config, &params, &pair, est, t0_ns, &o, &searched))
+            .then(|| search.pose_rescued(&o, &searched))
             .flatten()
         {
             Some(rescued) => rescued,
-            None => weak_offset(config, est, Some(&o), searched),
+            None => search.weak_offset(Some(&o), searched),
         },
-        _ => weak_offset(config, est, None, searched),
+        _ => search.weak_offset(None, searched),
     };
     // The signal searches' lever warnings say "measure the lever": the pose fit did, and the Δt it
     // applies does not rest on their lead. They stand where it could not tell a forward lever from
@@ -468,52 +472,310 @@ fn searched_offset(
     Ok((report, warnings))
 }
 
-/// A confident answer: its clock model over time (refined by the pose fit under `auto` when the
-/// estimate has orientations), applied.
-fn accepted_offset(
-    config: &EvalConfig,
-    params: &crate::align::time_offset::OffsetParams,
-    pair: &Pair<'_>,
-    est: &Loaded,
+/// What every step of one estimate's time offset works on: the run's configuration, the searches'
+/// parameters, the reference and the estimate paired (their signals computed once), the estimate,
+/// and the instant its times count from. Built once by [`searched_offset`]; the steps (accept,
+/// refine by the pose fit, rescue, report weak, model over time) are its methods.
+struct OffsetSearch<'a> {
+    config: &'a EvalConfig,
+    params: &'a OffsetParams,
+    pair: &'a Pair<'a>,
+    est: &'a Loaded,
+    /// The instant the trajectories' times (s) count from, ns since the epoch.
     t0_ns: i64,
-    o: &OffsetEstimate,
-    searched: Searched,
-) -> (TimeOffsetReport, Vec<Warning>) {
-    let Searched {
-        mut methods,
-        reason,
-        implied_lever,
-    } = searched;
-    let posed = pose_refined(
-        config,
-        params,
-        pair,
-        est,
-        t0_ns,
-        o,
-        &methods,
-        Starts::AnswerThenOthers,
-    );
-    let (report, w, method, reason) = match posed {
+}
+
+impl OffsetSearch<'_> {
+    /// A confident answer: its clock model over time (refined by the pose fit under `auto` when the
+    /// estimate has orientations), applied.
+    fn accepted_offset(
+        &self,
+        o: &OffsetEstimate,
+        searched: Searched,
+    ) -> (TimeOffsetReport, Vec<Warning>) {
+        let Searched {
+            mut methods,
+            reason,
+            implied_lever,
+        } = searched;
+        let posed = self.pose_refined(o, &methods, Starts::AnswerThenOthers);
+        let (report, w, method, reason) = match posed {
+            Some(Posed {
+                report,
+                warnings: w,
+                note,
+                entry,
+                ..
+            }) => {
+                methods.push(entry);
+                (report, w, OffsetMethod::Pose, format!("{reason}; {note}"))
+            }
+            None => {
+                let (report, w) = self.over_time(o);
+                (report, w, o.method, reason)
+            }
+        };
+        (
+            applied_report(report, method, o, methods, reason, implied_lever),
+            w,
+        )
+    }
+
+    /// The pose fit around the answer `o` (under `auto`, when the estimate has orientations), from
+    /// where `starts` allows; with the default Newton Jacobian, else the narrow one where the
+    /// default cannot make the fit (see [`crate::align::pose_fit::NARROW_JACOBIAN_PERIODS`]).
+    fn pose_refined(
+        &self,
+        o: &OffsetEstimate,
+        methods: &[OffsetMethodReport],
+        starts: Starts,
+    ) -> Option<Posed> {
+        use crate::align::pose_fit::{JACOBIAN_PERIODS, NARROW_JACOBIAN_PERIODS};
+        let q = self.est.trajectory.orientations.as_deref()?;
+        if !self.config.pose_fit() {
+            return None;
+        }
+        let attempt = |jacobian_periods: f64| {
+            let pose_from = |start: &OffsetEstimate| {
+                let fit = (q, jacobian_periods);
+                self.pose_over_time(fit, start, methods)
+            };
+            pose_from(o).or_else(|| match starts {
+                Starts::AnswerThenOthers => pose_from_another_answer(o, methods, pose_from),
+                Starts::AnswerOnly => None,
+            })
+        };
+        attempt(JACOBIAN_PERIODS).or_else(|| attempt(NARROW_JACOBIAN_PERIODS))
+    }
+
+    /// No search was confident enough to be applied (`weak`, the best answer): the pose fit started
+    /// from each search's answer (on near-straight paths the speed search was within a few
+    /// milliseconds where its peak was too flat to be confident, and the curvature searches there
+    /// are noise; on walking robots a confident speed search matched at a wrong lag contradicts
+    /// signed curvature's lead). A fit counts when it converged with its lever (its σ has its
+    /// parts), tells the forward lever from Δt (at a constant speed nothing does, and the answer
+    /// stays weak), and stayed within [`MAX_DISAGREEMENT_S`] of its start or the lead search, which
+    /// judges the basins it compares on every window, moved it; of those, the one with the least
+    /// mean squared residual over its windows is applied, the reason saying where it started.
+    /// `None` when none counts.
+    ///
+    /// [`MAX_DISAGREEMENT_S`]: crate::align::pose_model::MAX_DISAGREEMENT_S
+    fn pose_rescued(
+        &self,
+        weak: &OffsetEstimate,
+        searched: &Searched,
+    ) -> Option<(TimeOffsetReport, Vec<Warning>)> {
+        use crate::align::pose_model::MAX_DISAGREEMENT_S;
+        let mut starts: Vec<(OffsetMethod, f64)> = Vec::new();
+        for m in &searched.methods {
+            match m.offset_s {
+                Some(offset_s)
+                    if m.status != MethodStatus::Failed
+                        && offset_s.is_finite()
+                        && !starts
+                            .iter()
+                            .any(|(_, s)| (s - offset_s).abs() <= MAX_DISAGREEMENT_S) =>
+                {
+                    starts.push((m.method, offset_s))
+                }
+                _ => {}
+            }
+        }
+        let (method, offset_s, posed) = starts
+            .into_iter()
+            .filter_map(|(method, offset_s)| {
+                let start = OffsetEstimate {
+                    method,
+                    offset_s,
+                    status: OffsetStatus::Ok,
+                    ..*weak
+                };
+                let posed = self.pose_refined(&start, &searched.methods, Starts::AnswerOnly)?;
+                let near = (posed.report.offset_s - offset_s).abs() <= MAX_DISAGREEMENT_S;
+                let separable = posed.report.fitted_forward_separable == Some(true);
+                (posed.report.sigma_parts.is_some() && separable && (near || posed.lead_moved))
+                    .then_some((method, offset_s, posed))
+            })
+            .min_by(|a, b| a.2.mse_m2.total_cmp(&b.2.mse_m2))?;
+        let mut methods = searched.methods.clone();
+        methods.push(posed.entry);
+        let reason = format!(
+            "{}; but the pose fit started from {method}'s answer ({offset_s:+.3} s) converged with its lever and fits the windows best of the searches' answers: {}",
+            searched.reason, posed.note
+        );
+        let report = applied_report(
+            posed.report,
+            OffsetMethod::Pose,
+            weak,
+            methods,
+            reason,
+            searched.implied_lever,
+        );
+        Some((report, posed.warnings))
+    }
+
+    /// No confident peak: nothing applied (0 s), the best answer reported, a warning saying what to
+    /// do.
+    fn weak_offset(
+        &self,
+        best: Option<&OffsetEstimate>,
+        searched: Searched,
+    ) -> (TimeOffsetReport, Vec<Warning>) {
+        let (method, offset_s, correlation, confidence) = match best {
+            Some(o) => (
+                o.method,
+                o.offset_s,
+                Some(o.correlation),
+                Some(o.confidence),
+            ),
+            None => (self.config.params.offset_method(), 0.0, None, None),
+        };
+        let hint = if self.config.params.offset_method() == OffsetMethod::Auto {
+            format!(
+                "{}. Check the overlap or give --time-offset",
+                searched.reason
+            )
+        } else {
+            "Check the overlap, try --offset-method auto or give --time-offset".into()
+        };
+        let warning = Warning {
+            code: WarningCode::WeakTimeOffset,
+            message: format!(
+                "{}: the {} time-offset peak is weak (best {:+.3} s); Drift Error computed at 0 s. {}",
+                self.est.name,
+                method.as_str(),
+                offset_s,
+                hint
+            ),
+        };
+        let report = TimeOffsetReport {
+            method: method.into(),
+            offset_s,
+            applied_s: 0.0,
+            correlation,
+            confidence,
+            status: TimeOffsetStatus::Weak,
+            methods: searched.methods,
+            reason: Some(searched.reason),
+            implied_lever_arm_m: searched.implied_lever,
+            ..Default::default()
+        };
+        (report, vec![warning])
+    }
+
+    /// The clock model from the pose fit ([`crate::align::pose_model`]) around the signal searches'
+    /// answer `o` (the other confident searches' answers in `methods` widen its lead search), on
+    /// the estimate's `orientations` with the Newton Jacobian `jacobian_periods` wide
+    /// ([`crate::align::pose_fit::PoseFitParams::jacobian_periods`]; the note says when it is not
+    /// the default): the report's fields, the warnings of a non-constant model chosen from the
+    /// data, the note for the reason, and the `pose` entry of `methods`. `None` when the fit cannot
+    /// be made (the signal searches' profile is used instead).
+    fn pose_over_time(
+        &self,
+        (orientations, jacobian_periods): (&[nalgebra::UnitQuaternion<f64>], f64),
+        o: &OffsetEstimate,
+        methods: &[OffsetMethodReport],
+    ) -> Option<Posed> {
+        use crate::align::pose_model::pose_clock_model;
+        // The other confident searches' answers: the lead search scans about them too.
+        let other_answers_s: Vec<f64> = confident_answers(methods, o.method)
+            .map(|(_, offset_s)| offset_s)
+            .collect();
+        let gap_s = self
+            .params
+            .max_gap_s
+            .unwrap_or(self.params.curvature.dt_max_s);
+        let jumps = crate::align::jumps::jumps(self.pair.estimate.0, self.pair.estimate.1, gap_s);
+        let mut data = pose_data(self.pair, orientations, &jumps, gap_s);
+        data.params.jacobian_periods = jacobian_periods;
+        // The speed signals locate a step's time when the positions do not (computed already by
+        // `auto`; otherwise only when asked).
+        let speed = std::cell::OnceCell::new();
+        let cell = &speed;
+        let signals = move || {
+            cell.get_or_init(|| {
+                crate::align::time_offset::prepared_signals(
+                    OffsetMethod::Speed,
+                    self.pair,
+                    self.params,
+                    o.offset_s,
+                )
+                .ok()
+            })
+            .as_ref()
+            .map(speed_views)
+        };
+        let pc = pose_clock_model(
+            &data,
+            o.offset_s,
+            &other_answers_s,
+            &self.config.params.offset_profile(),
+            &signals,
+            self.config.params.forced_offset_model(),
+        )?;
+        let t0_s = self.t0_ns as f64 * 1e-9;
+        let model = &pc.model;
+        let warnings = model_warnings(self.config, model, &self.est.name);
+        let (lever, lever_sigma) = pc.lever;
+        let report = TimeOffsetReport {
+            fitted_lever_m: Some([lever.x, lever.y, lever.z]),
+            fitted_lever_sigma_m: lever_sigma.map(|s| [s.x, s.y, s.z]),
+            fitted_forward_separable: pc.fit.as_ref().map(|f| !f.inseparable()),
+            sigma_parts: pc.sigma_parts,
+            ..model_report(model, &pc.profile, t0_s)
+        };
+        let mut note = pose_note(&pc);
+        if jacobian_periods < crate::align::pose_fit::JACOBIAN_PERIODS {
+            note.push_str(&format!(
+                "; Newton stepped on a Jacobian {jacobian_periods:.0} of the estimate's periods beyond the differences, not the default {:.0}, with which the fit could not be made (over that reach a gait's bob can turn it negative)",
+                crate::align::pose_fit::JACOBIAN_PERIODS
+            ));
+        }
+        let mse_m2 = pc.fit.as_ref().map_or(f64::INFINITY, |f| {
+            f.rms_m.iter().map(|r| r * r).sum::<f64>() / f.rms_m.len().max(1) as f64
+        });
         Some(Posed {
             report,
-            warnings: w,
+            warnings,
             note,
-            entry,
-            ..
-        }) => {
-            methods.push(entry);
-            (report, w, OffsetMethod::Pose, format!("{reason}; {note}"))
-        }
-        None => {
-            let (report, w) = over_time(config, params, pair, o, &est.name, t0_ns);
-            (report, w, o.method, reason)
-        }
-    };
-    (
-        applied_report(report, method, o, methods, reason, implied_lever),
-        w,
-    )
+            entry: pose_entry(&pc),
+            mse_m2,
+            lead_moved: pc.replaced.is_some(),
+        })
+    }
+
+    /// The offset profile of the applied method around its whole-mission answer `o`, the clock
+    /// model (chosen or `--offset-model`), its report fields and the warnings of a non-constant
+    /// model chosen from the data. On a mission too short for a profile: a constant model and no
+    /// profile.
+    fn over_time(&self, o: &OffsetEstimate) -> (TimeOffsetReport, Vec<Warning>) {
+        let t0_s = self.t0_ns as f64 * 1e-9;
+        let found = clock_model_of(
+            self.pair,
+            self.params,
+            o,
+            &self.config.params.offset_profile(),
+            self.config.params.forced_offset_model(),
+        );
+        let Ok((profile, model)) = found else {
+            let reason = "constant: no offset profile (too short an overlap)".to_string();
+            return (
+                TimeOffsetReport {
+                    offset_s: o.offset_s,
+                    sigma_s: o.sigma_s,
+                    model: Some(OffsetModel::Constant),
+                    model_reason: Some(reason),
+                    ..Default::default()
+                },
+                Vec::new(),
+            );
+        };
+        let warnings = model_warnings(self.config, &model, &self.est.name);
+        let report = TimeOffsetReport {
+            ..model_report(&model, &profile, t0_s)
+        };
+        (report, warnings)
+    }
 }
 
 /// `report` (the clock model's fields) as the applied answer of `method`: its offset applied, the
@@ -546,116 +808,6 @@ enum Starts {
     AnswerThenOthers,
     /// From the answer given only (the caller tries the others itself).
     AnswerOnly,
-}
-
-/// The pose fit around the answer `o` (under `auto`, when the estimate has orientations), from
-/// where `starts` allows; with the default Newton Jacobian, else the narrow one where the default
-/// cannot make the fit (see [`crate::align::pose_fit::NARROW_JACOBIAN_PERIODS`]).
-#[allow(clippy::too_many_arguments)]
-fn pose_refined(
-    config: &EvalConfig,
-    params: &crate::align::time_offset::OffsetParams,
-    pair: &Pair<'_>,
-    est: &Loaded,
-    t0_ns: i64,
-    o: &OffsetEstimate,
-    methods: &[OffsetMethodReport],
-    starts: Starts,
-) -> Option<Posed> {
-    use crate::align::pose_fit::{JACOBIAN_PERIODS, NARROW_JACOBIAN_PERIODS};
-    let q = est.trajectory.orientations.as_deref()?;
-    if !config.pose_fit() {
-        return None;
-    }
-    let attempt = |jacobian_periods: f64| {
-        let pose_from = |start: &OffsetEstimate| {
-            let fit = (q, jacobian_periods);
-            pose_over_time(config, params, pair, fit, start, methods, &est.name, t0_ns)
-        };
-        pose_from(o).or_else(|| match starts {
-            Starts::AnswerThenOthers => pose_from_another_answer(o, methods, pose_from),
-            Starts::AnswerOnly => None,
-        })
-    };
-    attempt(JACOBIAN_PERIODS).or_else(|| attempt(NARROW_JACOBIAN_PERIODS))
-}
-
-/// No search was confident enough to be applied (`weak`, the best answer): the pose fit started
-/// from each search's answer (on near-straight paths the speed search was within a few
-/// milliseconds where its peak was too flat to be confident, and the curvature searches there are
-/// noise; on walking robots a confident speed search matched at a wrong lag contradicts signed
-/// curvature's lead). A fit counts when it converged with its lever (its σ has its parts), tells
-/// the forward lever from Δt (at a constant speed nothing does, and the answer stays weak), and
-/// stayed within [`MAX_DISAGREEMENT_S`] of its start or the lead search, which judges the basins
-/// it compares on every window, moved it; of those, the one with the least mean squared residual
-/// over its windows is applied, the reason saying where it started. `None` when none counts.
-///
-/// [`MAX_DISAGREEMENT_S`]: crate::align::pose_model::MAX_DISAGREEMENT_S
-fn pose_rescued(
-    config: &EvalConfig,
-    params: &crate::align::time_offset::OffsetParams,
-    pair: &Pair<'_>,
-    est: &Loaded,
-    t0_ns: i64,
-    weak: &OffsetEstimate,
-    searched: &Searched,
-) -> Option<(TimeOffsetReport, Vec<Warning>)> {
-    use crate::align::pose_model::MAX_DISAGREEMENT_S;
-    let mut starts: Vec<(OffsetMethod, f64)> = Vec::new();
-    for m in &searched.methods {
-        match m.offset_s {
-            Some(offset_s)
-                if m.status != MethodStatus::Failed
-                    && offset_s.is_finite()
-                    && !starts
-                        .iter()
-                        .any(|(_, s)| (s - offset_s).abs() <= MAX_DISAGREEMENT_S) =>
-            {
-                starts.push((m.method, offset_s))
-            }
-            _ => {}
-        }
-    }
-    let (method, offset_s, posed) = starts
-        .into_iter()
-        .filter_map(|(method, offset_s)| {
-            let start = OffsetEstimate {
-                method,
-                offset_s,
-                status: OffsetStatus::Ok,
-                ..*weak
-            };
-            let posed = pose_refined(
-                config,
-                params,
-                pair,
-                est,
-                t0_ns,
-                &start,
-                &searched.methods,
-                Starts::AnswerOnly,
-            )?;
-            let near = (posed.report.offset_s - offset_s).abs() <= MAX_DISAGREEMENT_S;
-            let separable = posed.report.fitted_forward_separable == Some(true);
-            (posed.report.sigma_parts.is_some() && separable && (near || posed.lead_moved))
-                .then_some((method, offset_s, posed))
-        })
-        .min_by(|a, b| a.2.mse_m2.total_cmp(&b.2.mse_m2))?;
-    let mut methods = searched.methods.clone();
-    methods.push(posed.entry);
-    let reason = format!(
-        "{}; but the pose fit started from {method}'s answer ({offset_s:+.3} s) converged with its lever and fits the windows best of the searches' answers: {}",
-        searched.reason, posed.note
-    );
-    let report = applied_report(
-        posed.report,
-        OffsetMethod::Pose,
-        weak,
-        methods,
-        reason,
-        searched.implied_lever,
-    );
-    Some((report, posed.warnings))
 }
 
 /// The pose fit from another confident search's answer, when it could not be made from the one
@@ -716,55 +868,6 @@ fn confident_answers(
         .iter()
         .filter(move |m| m.status == MethodStatus::Ok && m.method != except)
         .filter_map(|m| Some((m.method, m.offset_s?)))
-}
-
-/// No confident peak: nothing applied (0 s), the best answer reported, a warning saying what to do.
-fn weak_offset(
-    config: &EvalConfig,
-    est: &Loaded,
-    best: Option<&OffsetEstimate>,
-    searched: Searched,
-) -> (TimeOffsetReport, Vec<Warning>) {
-    let (method, offset_s, correlation, confidence) = match best {
-        Some(o) => (
-            o.method,
-            o.offset_s,
-            Some(o.correlation),
-            Some(o.confidence),
-        ),
-        None => (config.params.offset_method(), 0.0, None, None),
-    };
-    let hint = if config.params.offset_method() == OffsetMethod::Auto {
-        format!(
-            "{}. Check the overlap or give --time-offset",
-            searched.reason
-        )
-    } else {
-        "Check the overlap, try --offset-method auto or give --time-offset".into()
-    };
-    let warning = Warning {
-        code: WarningCode::WeakTimeOffset,
-        message: format!(
-            "{}: the {} time-offset peak is weak (best {:+.3} s); Drift Error computed at 0 s. {}",
-            est.name,
-            method.as_str(),
-            offset_s,
-            hint
-        ),
-    };
-    let report = TimeOffsetReport {
-        method: method.into(),
-        offset_s,
-        applied_s: 0.0,
-        correlation,
-        confidence,
-        status: TimeOffsetStatus::Weak,
-        methods: searched.methods,
-        reason: Some(searched.reason),
-        implied_lever_arm_m: searched.implied_lever,
-        ..Default::default()
-    };
-    (report, vec![warning])
 }
 
 /// The Drift Error of the aligned estimate at every window size (none unless `de` is asked for).
@@ -863,89 +966,6 @@ fn drift_report(r: &DriftErrorResult, t0_s: f64) -> DriftErrorReport {
         scale: r.lever_fit.map(|f| f.scale),
         lateral_lever_m: r.lever_fit.map(|f| f.lateral_lever_m),
     }
-}
-
-/// The clock model from the pose fit ([`crate::align::pose_model`]) around the signal searches'
-/// answer `o` (the other confident searches' answers in `methods` widen its lead search), on the
-/// estimate's `orientations` with the Newton Jacobian `jacobian_periods` wide
-/// ([`crate::align::pose_fit::PoseFitParams::jacobian_periods`]; the note says when it is not the
-/// default): the report's fields, the warnings of a non-constant model chosen from the data, the
-/// note for the reason, and the `pose` entry of `methods`. `None` when the fit cannot be made
-/// (the signal searches' profile is used instead).
-#[allow(clippy::too_many_arguments)]
-fn pose_over_time(
-    config: &EvalConfig,
-    params: &crate::align::time_offset::OffsetParams,
-    pair: &Pair<'_>,
-    (orientations, jacobian_periods): (&[nalgebra::UnitQuaternion<f64>], f64),
-    o: &OffsetEstimate,
-    methods: &[OffsetMethodReport],
-    name: &str,
-    t0_ns: i64,
-) -> Option<Posed> {
-    use crate::align::pose_model::pose_clock_model;
-    // The other confident searches' answers: the lead search scans about them too.
-    let other_answers_s: Vec<f64> = confident_answers(methods, o.method)
-        .map(|(_, offset_s)| offset_s)
-        .collect();
-    let gap_s = params.max_gap_s.unwrap_or(params.curvature.dt_max_s);
-    let jumps = crate::align::jumps::jumps(pair.estimate.0, pair.estimate.1, gap_s);
-    let mut data = pose_data(pair, orientations, &jumps, gap_s);
-    data.params.jacobian_periods = jacobian_periods;
-    // The speed signals locate a step's time when the positions do not (computed already by
-    // `auto`; otherwise only when asked).
-    let speed = std::cell::OnceCell::new();
-    let cell = &speed;
-    let signals = move || {
-        cell.get_or_init(|| {
-            crate::align::time_offset::prepared_signals(
-                OffsetMethod::Speed,
-                pair,
-                params,
-                o.offset_s,
-            )
-            .ok()
-        })
-        .as_ref()
-        .map(speed_views)
-    };
-    let pc = pose_clock_model(
-        &data,
-        o.offset_s,
-        &other_answers_s,
-        &config.params.offset_profile(),
-        &signals,
-        config.params.forced_offset_model(),
-    )?;
-    let t0_s = t0_ns as f64 * 1e-9;
-    let model = &pc.model;
-    let warnings = model_warnings(config, model, name);
-    let (lever, lever_sigma) = pc.lever;
-    let report = TimeOffsetReport {
-        fitted_lever_m: Some([lever.x, lever.y, lever.z]),
-        fitted_lever_sigma_m: lever_sigma.map(|s| [s.x, s.y, s.z]),
-        fitted_forward_separable: pc.fit.as_ref().map(|f| !f.inseparable()),
-        sigma_parts: pc.sigma_parts,
-        ..model_report(model, &pc.profile, t0_s)
-    };
-    let mut note = pose_note(&pc);
-    if jacobian_periods < crate::align::pose_fit::JACOBIAN_PERIODS {
-        note.push_str(&format!(
-            "; Newton stepped on a Jacobian {jacobian_periods:.0} of the estimate's periods beyond the differences, not the default {:.0}, with which the fit could not be made (over that reach a gait's bob can turn it negative)",
-            crate::align::pose_fit::JACOBIAN_PERIODS
-        ));
-    }
-    let mse_m2 = pc.fit.as_ref().map_or(f64::INFINITY, |f| {
-        f.rms_m.iter().map(|r| r * r).sum::<f64>() / f.rms_m.len().max(1) as f64
-    });
-    Some(Posed {
-        report,
-        warnings,
-        note,
-        entry: pose_entry(&pc),
-        mse_m2,
-        lead_moved: pc.replaced.is_some(),
-    })
 }
 
 /// What the pose fit works on: the pair's positions, the estimate's `orientations` and `jumps`, its
@@ -1117,44 +1137,4 @@ fn model_report(
         profile_step_s: Some(profile.step_s),
         ..Default::default()
     }
-}
-
-/// The offset profile of the applied method around its whole-mission answer `o`, the clock model
-/// (chosen or `--offset-model`), its report fields and the warnings of a non-constant model chosen
-/// from the data. On a mission too short for a profile: a constant model and no profile.
-#[allow(clippy::too_many_arguments)]
-fn over_time(
-    config: &EvalConfig,
-    params: &crate::align::time_offset::OffsetParams,
-    pair: &Pair<'_>,
-    o: &OffsetEstimate,
-    name: &str,
-    t0_ns: i64,
-) -> (TimeOffsetReport, Vec<Warning>) {
-    let t0_s = t0_ns as f64 * 1e-9;
-    let found = clock_model_of(
-        pair,
-        params,
-        o,
-        &config.params.offset_profile(),
-        config.params.forced_offset_model(),
-    );
-    let Ok((profile, model)) = found else {
-        let reason = "constant: no offset profile (too short an overlap)".to_string();
-        return (
-            TimeOffsetReport {
-                offset_s: o.offset_s,
-                sigma_s: o.sigma_s,
-                model: Some(OffsetModel::Constant),
-                model_reason: Some(reason),
-                ..Default::default()
-            },
-            Vec::new(),
-        );
-    };
-    let warnings = model_warnings(config, &model, name);
-    let report = TimeOffsetReport {
-        ..model_report(&model, &profile, t0_s)
-    };
-    (report, warnings)
 }
