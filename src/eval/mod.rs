@@ -614,8 +614,8 @@ impl OffsetSearch<'_> {
         Some((report, posed.warnings))
     }
 
-    /// No confident peak: nothing applied (0 s), the best answer reported, a warning saying what to
-    /// do.
+    /// No confident peak: nothing applied (0 s), the best answer reported, and a warning saying
+    /// what to do.
     fn weak_offset(
         &self,
         best: Option<&OffsetEstimate>,
