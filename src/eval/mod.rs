@@ -381,6 +381,7 @@ fn searched_offset(
         pair: &pair,
         est,
         t0_ns,
+        jumps: std::cell::OnceCell::new(),
     };
     let mut warnings = Vec::new();
     // `auto` runs every method; a named method runs alone (only what it needs is computed).
@@ -483,6 +484,9 @@ struct OffsetSearch<'a> {
     est: &'a Loaded,
     /// The instant the trajectories' times (s) count from, ns since the epoch.
     t0_ns: i64,
+    /// Where the estimate jumps ([`crate::align::jumps::jumps`]), found once for every pose fit
+    /// (a rescue or a fallback makes several).
+    jumps: std::cell::OnceCell<Vec<(f64, f64)>>,
 }
 
 impl OffsetSearch<'_> {
@@ -685,8 +689,10 @@ impl OffsetSearch<'_> {
             .params
             .max_gap_s
             .unwrap_or(self.params.curvature.dt_max_s);
-        let jumps = crate::align::jumps::jumps(self.pair.estimate.0, self.pair.estimate.1, gap_s);
-        let mut data = pose_data(self.pair, orientations, &jumps, gap_s);
+        let jumps = self.jumps.get_or_init(|| {
+            crate::align::jumps::jumps(self.pair.estimate.0, self.pair.estimate.1, gap_s)
+        });
+        let mut data = pose_data(self.pair, orientations, jumps, gap_s);
         data.params.jacobian_periods = jacobian_periods;
         // The speed signals locate a step's time when the positions do not (computed already by
         // `auto`; otherwise only when asked).
@@ -771,10 +777,7 @@ impl OffsetSearch<'_> {
             );
         };
         let warnings = model_warnings(self.config, &model, &self.est.name);
-        let report = TimeOffsetReport {
-            ..model_report(&model, &profile, t0_s)
-        };
-        (report, warnings)
+        (model_report(&model, &profile, t0_s), warnings)
     }
 }
 
