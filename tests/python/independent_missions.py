@@ -28,7 +28,8 @@ over the mean speed, what the signal searches read as a clock offset), the summa
 acceptance asks of constant clocks (the |error| median and worst, the share 2σ covers, the median
 |error|/σ, σ above 50 ms at an error below 10 ms, and clock alarms), a table per kind (applied,
 |error| median and worst, within 10 ms, 2σ covers, confident misses: off by more than 50 ms and
-2σ) and one of the walking robots per estimate rate. Mission k of a kind in seed set S has the seed 1000·S + 100·(the kind's index) + k. Needs NumPy.
+2σ) and one of the walking robots per estimate rate. Mission k of a kind in seed set S has the
+seed 1000·S + 100·(the kind's index) + k. Needs NumPy.
 """
 
 import argparse
@@ -305,6 +306,7 @@ def main():
             f"| {hz:.0f} Hz | {len(got)} | {statistics.median(abs(r['error_s']) * 1e3 for r in got):.1f} | "
             f"{100 * sum(x <= 2 for x in z) / len(z):.0f} % | {sum(x > 3 for x in z)} |"
         )
+
 
 if __name__ == "__main__":
     sys.exit(main())
