@@ -380,7 +380,7 @@ fn searched_offset(
         params: &params,
         pair: &pair,
         est,
-        t0_ns,
+        t0_s: t0_ns as f64 * 1e-9,
         jumps: std::cell::OnceCell::new(),
     };
     let mut warnings = Vec::new();
@@ -482,8 +482,8 @@ struct OffsetSearch<'a> {
     params: &'a OffsetParams,
     pair: &'a Pair<'a>,
     est: &'a Loaded,
-    /// The instant the trajectories' times (s) count from, ns since the epoch.
-    t0_ns: i64,
+    /// The instant the trajectories' times count from, seconds since the epoch.
+    t0_s: f64,
     /// Where the estimate jumps ([`crate::align::jumps::jumps`]), found once for every pose fit
     /// (a rescue or a fallback makes several).
     jumps: std::cell::OnceCell<Vec<(f64, f64)>>,
@@ -719,7 +719,6 @@ impl OffsetSearch<'_> {
             &signals,
             self.config.params.forced_offset_model(),
         )?;
-        let t0_s = self.t0_ns as f64 * 1e-9;
         let model = &pc.model;
         let warnings = model_warnings(self.config, model, &self.est.name);
         let (lever, lever_sigma) = pc.lever;
@@ -728,7 +727,7 @@ impl OffsetSearch<'_> {
             fitted_lever_sigma_m: lever_sigma.map(|s| [s.x, s.y, s.z]),
             fitted_forward_separable: pc.fit.as_ref().map(|f| !f.inseparable()),
             sigma_parts: pc.sigma_parts,
-            ..model_report(model, &pc.profile, t0_s)
+            ..model_report(model, &pc.profile, self.t0_s)
         };
         let mut note = pose_note(&pc);
         if jacobian_periods < crate::align::pose_fit::JACOBIAN_PERIODS {
@@ -755,7 +754,6 @@ impl OffsetSearch<'_> {
     /// model chosen from the data. On a mission too short for a profile: a constant model and no
     /// profile.
     fn over_time(&self, o: &OffsetEstimate) -> (TimeOffsetReport, Vec<Warning>) {
-        let t0_s = self.t0_ns as f64 * 1e-9;
         let found = clock_model_of(
             self.pair,
             self.params,
@@ -777,7 +775,7 @@ impl OffsetSearch<'_> {
             );
         };
         let warnings = model_warnings(self.config, &model, &self.est.name);
-        (model_report(&model, &profile, t0_s), warnings)
+        (model_report(&model, &profile, self.t0_s), warnings)
     }
 }
 
