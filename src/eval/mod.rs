@@ -1026,12 +1026,17 @@ fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
         lever.y,
         lever.z
     );
-    if let Some((model, first_s)) = pc.replaced {
+    if let Some(r) = pc.replaced {
         note.push_str(&format!(
-            "; the windows started from that answer chose {} ({:+.3} s first), but the lead search found this constant {:+.3} s away, fitting the windows better, and its own windows choose a constant too",
-            model.as_str(),
-            first_s,
-            pc.first_offset.0 - first_s
+            "; the windows started from that answer chose {} ({:+.3} s first), but the lead search found this constant {:+.3} s away, fitting the windows better, and its own windows choose a constant too{}",
+            r.model.as_str(),
+            r.first_s,
+            pc.first_offset.0 - r.first_s,
+            if r.narrow_windows {
+                " (measured on a Jacobian of one of the estimate's periods beyond the differences: on the default, fewer than three of them could be fitted)"
+            } else {
+                ""
+            }
         ));
     }
     if pc.outlier_windows > 0 {
