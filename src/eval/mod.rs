@@ -1033,9 +1033,13 @@ fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
             r.first_s,
             pc.first_offset.0 - r.first_s,
             if r.narrow_windows {
-                " (measured on a Jacobian of one of the estimate's periods beyond the differences: on the default, fewer than three of them could be fitted)"
+                format!(
+                    " (measured on a Jacobian {:.0} of the estimate's periods beyond the differences: on the default {:.0}, fewer than three of them could be fitted)",
+                    crate::align::pose_fit::NARROW_JACOBIAN_PERIODS,
+                    crate::align::pose_fit::JACOBIAN_PERIODS
+                )
             } else {
-                ""
+                String::new()
             }
         ));
     }

@@ -50,10 +50,9 @@
 //! the narrow one, as the caller does where the default cannot make the near fit (a walking robot
 //! with receipt stamps: not one of 44 windows converged from the right fit on the default, and the
 //! near fit, worse by a paired t of 25, stayed 655 ms off; on the narrow one all 44 lay within 5 ms
-//! of it). Where
-//! another fit (or the scan's minimum it started from, where that fits the windows better than
-//! the fit that climbed from it) is not worse beyond [`LEAD_SIGNIFICANCE_T`] (a paired t over
-//! the windows' residuals: the windows are independent where the points are not), the data
+//! of it). Where another fit (or the scan's minimum it started from, where that fits the windows
+//! better than the fit that climbed from it) is not worse beyond [`LEAD_SIGNIFICANCE_T`] (a paired
+//! t over the windows' residuals: the windows are independent where the points are not), the data
 //! cannot tell the two apart, and the constant's σ adds half their distance in quadrature
 //! (`sigma_parts.valley_s`). Measured on a second simulator's missions (docs/evidence.md, "A
 //! second simulator, and the lead search").
