@@ -88,6 +88,10 @@ pub(super) struct Problem<'a> {
     /// The windows' scale prior, metres of spread per sample
     /// ([`super::PoseFitParams::scale_prior_m`]).
     scale_prior_m: f64,
+    /// The reference samples averaged into one point by [`Problem::averaged`] (1: none), and the
+    /// reference's median period, seconds.
+    block: usize,
+    ref_period_s: f64,
 }
 
 /// One point of a window: reference position, the estimate's position ê, u = ê − R̂·D, ∂u/∂Δt
@@ -198,7 +202,7 @@ impl Problem<'_> {
         with_lever: bool,
         s_bar: f64,
     ) -> Option<Terms> {
-        let pts = self.points(w, shape, theta, d);
+        let pts = self.averaged(self.points(w, shape, theta, d));
         if pts.len() < MIN_WINDOW_SAMPLES {
             return None;
         }
@@ -218,6 +222,46 @@ impl Problem<'_> {
             });
         }
         total.filter(|t| t.n >= MIN_WINDOW_SAMPLES)
+    }
+
+    /// `pts` (in time order) averaged over blocks of `block` consecutive reference samples: the
+    /// band the estimate cannot represent taken out of both sides of the model alike (see
+    /// [`super::AVERAGE_BELOW_HZ`]). A block holds samples of one stretch between jumps, none
+    /// dropped between them (a gap, a point the estimate could not be interpolated at); samples
+    /// that make no whole block are left out. Unchanged when the block is one sample, or when the
+    /// window could not keep [`MIN_WINDOW_SAMPLES`] blocks (a short window, a very slow estimate
+    /// against a dense reference): such a window is compared point by point.
+    fn averaged(&self, pts: Vec<Pt>) -> Vec<Pt> {
+        let k = self.block;
+        if k < 2 || pts.len() < k * MIN_WINDOW_SAMPLES {
+            return pts;
+        }
+        let kf = k as f64;
+        // k consecutive samples span k − 1 periods; half a period more allows for jittered stamps.
+        let span_s = (kf - 0.5) * self.ref_period_s;
+        let mean_v =
+            |g: &[Pt], f: fn(&Pt) -> Vector3<f64>| g.iter().map(f).sum::<Vector3<f64>>() / kf;
+        let mut out: Vec<Pt> = Vec::with_capacity(pts.len() / k + 1);
+        let mut i = 0;
+        while i + k <= pts.len() {
+            let g = &pts[i..i + k];
+            if g.iter().all(|q| q.seg == g[0].seg) && g[k - 1].t - g[0].t <= span_s {
+                out.push(Pt {
+                    r: mean_v(g, |q| q.r),
+                    e: mean_v(g, |q| q.e),
+                    u: mean_v(g, |q| q.u),
+                    du: mean_v(g, |q| q.du),
+                    dw: mean_v(g, |q| q.dw),
+                    rhat: g.iter().map(|q| q.rhat).sum::<Matrix3<f64>>() / kf,
+                    t: g.iter().map(|q| q.t).sum::<f64>() / kf,
+                    seg: g[0].seg,
+                });
+                i += k;
+            } else {
+                i += 1;
+            }
+        }
+        out
     }
 
     /// The instrument's half-step h, seconds (see [`STENCIL_MIN_S`]).
@@ -703,12 +747,14 @@ pub fn windows(ref_t: &[f64], window_s: Option<f64>) -> Vec<Window> {
 // The mission's problem, built here beside the types it fills (`PoseData` itself is in `mod.rs`).
 impl<'a> PoseData<'a> {
     pub(super) fn problem(&self) -> Problem<'a> {
-        let mut steps: Vec<f64> = self.estimate.t.windows(2).map(|w| w[1] - w[0]).collect();
-        let period = if steps.is_empty() {
-            0.01
+        let period = median_step(self.estimate.t).unwrap_or(0.01);
+        let ref_period_s = median_step(self.ref_t).unwrap_or(f64::INFINITY);
+        // Two of the estimate's periods of reference samples, where the estimate is slow enough
+        // for a gait to reach its Nyquist band and the reference samples it more densely.
+        let block = if period * self.params.average_below_hz >= 1.0 && ref_period_s > 0.0 {
+            (2.0 * period / ref_period_s).round().clamp(1.0, 1e6) as usize
         } else {
-            let mid = steps.len() / 2;
-            *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+            1
         };
         Problem {
             ref_t: self.ref_t,
@@ -717,8 +763,20 @@ impl<'a> PoseData<'a> {
             h: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S),
             hw: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S) + self.params.jacobian_periods * period,
             scale_prior_m: self.params.scale_prior_m,
+            block,
+            ref_period_s,
         }
     }
+}
+
+/// The median step of the times `t`, `None` with fewer than two.
+fn median_step(t: &[f64]) -> Option<f64> {
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.is_empty() {
+        return None;
+    }
+    let mid = steps.len() / 2;
+    Some(*steps.select_nth_unstable_by(mid, f64::total_cmp).1)
 }
 
 /// How many times the change time and the two sides' similarities are refined in turn.
