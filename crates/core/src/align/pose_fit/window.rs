@@ -718,9 +718,7 @@ pub fn windows(ref_t: &[f64], window_s: Option<f64>) -> Vec<Window> {
     if n < MIN_WINDOW_SAMPLES {
         return Vec::new();
     }
-    let mut steps: Vec<f64> = ref_t.windows(2).map(|w| w[1] - w[0]).collect();
-    let mid = steps.len() / 2;
-    let period = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let period = median_step(ref_t).unwrap_or(0.0);
     let len = window_s.unwrap_or(WINDOW_S.max(1.5 * MIN_WINDOW_SAMPLES as f64 * period));
     let (a, b) = (ref_t[0], ref_t[n - 1]);
     let count = ((b - a) / len).floor().max(1.0) as usize;
