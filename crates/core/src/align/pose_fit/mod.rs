@@ -32,9 +32,10 @@
 //! window scale would absorb a speed changing steadily within the window and leave Δt to the lever
 //! on straight stretches: `align::pose_model::scale_prior_m`), so a window that stands or turns in
 //! place (whose positions barely spread) keeps the mission's scale and still pins D: its reference
-//! stands still while ê sweeps the lever's arc. The similarity of each window has a closed form (Umeyama: an SVD of the 3×3 cross-covariance); θ and D are found by
-//! Gauss–Newton on the normal equations reduced by each window's similarity (the Schur complement
-//! of the full system), from the offset `auto` found.
+//! stands still while ê sweeps the lever's arc. The similarity of each window has a closed form
+//! (Umeyama: an SVD of the 3×3 cross-covariance); θ and D are found by Gauss–Newton on the normal
+//! equations reduced by each window's similarity (the Schur complement of the full system), from
+//! the offset `auto` found.
 //!
 //! **What it cannot see.** At constant speed a sensor D_x ahead is, to first order, the same sensor
 //! D_x/v later: Δt and a forward lever are then inseparable. The fit says so: [`PoseFit::inseparable`]
