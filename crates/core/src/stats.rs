@@ -87,6 +87,25 @@ pub fn median(v: &[f64]) -> Option<f64> {
     })
 }
 
+/// The median step between consecutive times `t`, by selection (the upper of the two middle steps
+/// for an even count: the element a full sort puts at the middle index, in linear time); `None`
+/// with fewer than two times. A series' typical sampling period, which gaps and jitter barely move.
+///
+/// ```
+/// use trajdrift_core::stats::median_step;
+/// assert_eq!(median_step(&[0.0, 0.25, 0.5, 1.5, 1.75]), Some(0.25));
+/// assert_eq!(median_step(&[0.0, 1.0, 3.0]), Some(2.0));
+/// assert_eq!(median_step(&[5.0]), None);
+/// ```
+pub fn median_step(t: &[f64]) -> Option<f64> {
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.is_empty() {
+        return None;
+    }
+    let mid = steps.len() / 2;
+    Some(*steps.select_nth_unstable_by(mid, f64::total_cmp).1)
+}
+
 /// The `q` quantile (0 ≤ q ≤ 1) of sorted, non-empty `v`, linear between closest ranks (numpy default).
 pub fn quantile_sorted(v: &[f64], q: f64) -> f64 {
     let h = (v.len() - 1) as f64 * q.clamp(0.0, 1.0);

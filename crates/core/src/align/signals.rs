@@ -209,11 +209,7 @@ fn isotropic_noise(t: &[f64], p: &[Vector3<f64>]) -> Option<f64> {
     if n < 40 {
         return None;
     }
-    let mut steps: Vec<f64> = t[..n].windows(2).map(|w| w[1] - w[0]).collect();
-    // The median by selection (the element a full sort puts there, in linear time).
-    let mid = steps.len() / 2;
-    let typical = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
-    drop(steps);
+    let typical = crate::stats::median_step(&t[..n])?;
     if typical.is_nan() || typical <= 0.0 {
         return None;
     }

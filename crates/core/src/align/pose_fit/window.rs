@@ -8,6 +8,8 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, Vector3};
 
+use crate::stats::median_step;
+
 use super::sampler::{At, Sampler};
 use super::{ClockShape, PoseData, DRIFT_PRIOR_M2S2, MIN_WINDOW_SAMPLES, WINDOW_S};
 
@@ -765,16 +767,6 @@ impl<'a> PoseData<'a> {
             ref_period_s,
         }
     }
-}
-
-/// The median step of the times `t`, `None` with fewer than two.
-fn median_step(t: &[f64]) -> Option<f64> {
-    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-    if steps.is_empty() {
-        return None;
-    }
-    let mid = steps.len() / 2;
-    Some(*steps.select_nth_unstable_by(mid, f64::total_cmp).1)
 }
 
 /// How many times the change time and the two sides' similarities are refined in turn.
