@@ -48,7 +48,9 @@
 //! of the next's. The standard error of every fitted parameter is the delete-one-window jackknife of
 //! the whole fit, lever included: each window left out in turn (one Newton step of the reduced normal
 //! equations from the full solution, with the Jacobian S of the estimating equations measured at the
-//! solution: their change over a shift of the clock, see `SharedFit::jacobians`), variance
+//! solution: their change over a shift of the clock, see `SharedFit::jacobians`; where that step
+//! would move the clock beyond the shift the slopes were measured over, the fit without the window
+//! is made in full, see `SharedFit::jackknife`), variance
 //! (K−1)/K·Σ(θ₋ₖ − θ̄)². It assumes nothing about the
 //! residual — not whiteness, not its size — only that windows err independently; it is honest for the
 //! same reason a bootstrap is, and it includes the lever's uncertainty, which moves every window

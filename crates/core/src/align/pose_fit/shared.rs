@@ -26,6 +26,13 @@ pub(super) const OUTLIER_RMS_FACTOR: f64 = 4.0;
 /// constant a misfit, whose equations barely change with it) measured 0.38, and every window of
 /// the profile, stepped 2.6 times too far by it, failed to converge.
 const PROFILE_SCALE_RANGE: (f64, f64) = (1.0, 4.0);
+/// The jackknife refits at most this many windows' delete-one fits in full (see
+/// `SharedFit::jackknife`): the largest of the steps that leave the range their slope was measured
+/// over. One influential window is what breaks the one step; where many are beyond that range the
+/// fit is weak anyway, and each refit costs a whole fit. Refitting every such step moved no
+/// second-simulator mission more than these three did (235 missions with any), and took a weak
+/// near-straight drive's evaluation from 1.2 s to 7.9 s (403 refits); three, to 2.3 s.
+pub(super) const MAX_JACKKNIFE_REFITS: usize = 3;
 
 /// Fits the clock `shape` (from `theta0`) and, when `with_lever`, the lever (from `lever0`) over
 /// `windows`; windows whose residual RMS is an outlier are left out and the fit repeated.
@@ -580,23 +587,57 @@ impl SharedFit<'_> {
         Some(&si * h * si.transpose() * (rss / dof))
     }
 
-    /// The delete-one-window jackknife at the solution (see the module doc): each window left out
-    /// by one step (S − S_k)⁻¹·g_k of the summed equations less its own, S the Jacobian of
+    /// The delete-one-window jackknife at the solution `x` (see the module doc): each window left
+    /// out by one step (S − S_k)⁻¹·g_k of the summed equations less its own, S the Jacobian of
     /// [`Self::jacobians`]; the covariance (K−1)/K·Σ(δ₋ₖ − δ̄)(δ₋ₖ − δ̄)ᵀ of those steps.
     /// `None` when fewer than three windows could be left out.
-    fn jackknife(&self, terms: &[Option<Terms>], jac: &Jacobians) -> Option<DMatrix<f64>> {
+    ///
+    /// A step is a linear prediction from slopes measured over ± [`Self::probe_step`]; where it
+    /// moves a clock parameter beyond that, it extrapolates, and where the window's measured slopes
+    /// carry much of S along some direction, S − S_k is near-singular and the step runs away
+    /// (while the fit without the window may hardly move). That window's fit without it is then
+    /// made in full (Gauss–Newton from `x`; the
+    /// [`MAX_JACKKNIFE_REFITS`] largest such steps). On a vehicle with receipt stamps (reference
+    /// 2 Hz, estimate 20 Hz, Δt within 6 ms) one step was 3.9 s and σ 2.7 s; made in full, the
+    /// three largest steps (3.9 s, 229 ms, 139 ms) were 15, 14 and 21 ms, and σ 108 ms (the formal
+    /// σ is 79 ms) (docs/evidence.md, "The jackknife's runaway step, refitted").
+    fn jackknife(&self, x: &Iterate, jac: &Jacobians) -> Option<DMatrix<f64>> {
         let p = self.p;
-        let deltas: Vec<DVector<f64>> = terms
+        let mut deltas: Vec<(usize, DVector<f64>)> = x
+            .terms
             .iter()
             .zip(&jac.own)
-            .filter_map(|(t, own)| {
+            .enumerate()
+            .filter_map(|(k, (t, own))| {
                 let (t, own) = (t.as_ref()?, own.as_ref()?);
-                (&jac.whole - own).lu().solve(&t.g)
+                Some((k, (&jac.whole - own).lu().solve(&t.g)?))
             })
             .collect();
         if deltas.len() < 3 {
             return None;
         }
+        // How far beyond its probe step each step moves a clock parameter (> 1: beyond).
+        let reach = |k: usize, d: &DVector<f64>| {
+            (0..self.m)
+                .filter_map(|i| Some(d[i].abs() / self.probe_step(&self.windows[k], i)?))
+                .fold(0.0, f64::max)
+        };
+        let mut beyond: Vec<(usize, f64)> = deltas
+            .iter()
+            .enumerate()
+            .map(|(at, (k, d))| (at, reach(*k, d)))
+            .filter(|(_, r)| *r > 1.0)
+            .collect();
+        beyond.sort_by(|a, b| b.1.total_cmp(&a.1));
+        beyond.truncate(MAX_JACKKNIFE_REFITS);
+        let refits: Vec<(usize, DVector<f64>)> = beyond
+            .par_iter()
+            .filter_map(|(at, _)| Some((*at, self.refit_without(x, deltas[*at].0)?)))
+            .collect();
+        for (at, d) in refits {
+            deltas[at].1 = d;
+        }
+        let deltas: Vec<DVector<f64>> = deltas.into_iter().map(|(_, d)| d).collect();
         let kf = deltas.len() as f64;
         let mean = deltas.iter().fold(DVector::zeros(p), |a, d| a + d) / kf;
         let mut cov = DMatrix::<f64>::zeros(p, p);
@@ -606,6 +647,28 @@ impl SharedFit<'_> {
         }
         cov *= (kf - 1.0) / kf;
         Some(cov)
+    }
+
+    /// The change of the shared parameters from `x` when window `k` is left out, by Gauss–Newton
+    /// from `x` over the others; `None` when that fit cannot be made.
+    fn refit_without(&self, x: &Iterate, k: usize) -> Option<DVector<f64>> {
+        let others: Vec<Window> = (self.windows.iter().enumerate())
+            .filter(|(j, _)| *j != k)
+            .map(|(_, w)| w.clone())
+            .collect();
+        let fit = SharedFit::new(self.problem, &others, self.shape, self.with_lever);
+        let mut y = fit.start(x.theta.clone(), x.lever_m)?;
+        fit.gauss_newton(&mut y)?;
+        let mut d = DVector::zeros(self.p);
+        for i in 0..self.m {
+            d[i] = y.theta[i] - x.theta[i];
+        }
+        if self.with_lever {
+            for i in 0..3 {
+                d[self.m + i] = y.lever_m[i] - x.lever_m[i];
+            }
+        }
+        Some(d)
     }
 
     /// The scale of the clock columns for the profile's windows: the Jacobian of
@@ -647,7 +710,7 @@ impl SharedFit<'_> {
             .zip(&x.terms)
             .filter_map(|(w, t)| t.as_ref().map(|t| (w, t)))
             .collect();
-        let mut cov = self.jackknife(&x.terms, &jac)?;
+        let mut cov = self.jackknife(&x, &jac)?;
         let theta_jackknife_sigma: Vec<f64> = (0..m).map(|k| cov[(k, k)].max(0.0).sqrt()).collect();
         let mut theta_formal_sigma = vec![0.0; m];
         // The formal σ is the floor (see the module doc): each parameter's variance raised to it,
