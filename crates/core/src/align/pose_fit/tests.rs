@@ -477,7 +477,7 @@ fn a_gait_at_the_estimates_nyquist_band_is_averaged_out() {
 /// receipt, a 2 Hz reference: the jackknife's one step without a window (S − S_k, measured slopes)
 /// can run far beyond the probe step its slopes were measured over. Those windows' delete-one fits
 /// are made in full, so the jackknife's σ stays within twice its slow twin's (every delete-one fit
-/// made in full); by one step alone it was 2–4 times the twin's on five of these twelve draws.
+/// made in full); by one step alone it was 2.5–8.5 times the twin's on five of these twelve draws.
 #[test]
 fn the_jackknife_refits_a_window_whose_one_step_runs_away() {
     use rand::SeedableRng;
