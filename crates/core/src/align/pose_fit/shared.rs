@@ -652,10 +652,8 @@ impl SharedFit<'_> {
     /// The change of the shared parameters from `x` when window `k` is left out, by Gauss–Newton
     /// from `x` over the others; `None` when that fit cannot be made.
     fn refit_without(&self, x: &Iterate, k: usize) -> Option<DVector<f64>> {
-        let others: Vec<Window> = (self.windows.iter().enumerate())
-            .filter(|(j, _)| *j != k)
-            .map(|(_, w)| w.clone())
-            .collect();
+        let mut others = self.windows.to_vec();
+        others.remove(k);
         let fit = SharedFit::new(self.problem, &others, self.shape, self.with_lever);
         let mut y = fit.start(x.theta.clone(), x.lever_m)?;
         fit.gauss_newton(&mut y)?;
