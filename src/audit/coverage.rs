@@ -15,19 +15,11 @@ pub const MIN_GAP_S: f64 = 0.5;
 /// A gap is longer than this many median periods.
 pub const GAP_PERIODS: f64 = 5.0;
 
-/// Median sample period, seconds (`None` with fewer than two samples).
-pub fn median_period_s(t: &Trajectory) -> Option<f64> {
-    let d: Vec<f64> = t
-        .stamps_ns
-        .windows(2)
-        .map(|w| (w[1] - w[0]) as f64 * 1e-9)
-        .collect();
-    crate::stats::median(&d)
-}
-
 /// The gaps of `t`.
 pub fn gaps(t: &Trajectory) -> Gaps {
-    let threshold_s = median_period_s(t).map_or(MIN_GAP_S, |p| (GAP_PERIODS * p).max(MIN_GAP_S));
+    let threshold_s = t
+        .median_period_s()
+        .map_or(MIN_GAP_S, |p| (GAP_PERIODS * p).max(MIN_GAP_S));
     let mut g = Gaps {
         threshold_s,
         ..Gaps::default()
@@ -81,7 +73,7 @@ mod tests {
         let mut s: Vec<f64> = (0..100).map(|i| i as f64 * 0.1).collect();
         s.extend((0..100).map(|i| 12.0 + i as f64 * 0.1));
         let t = stamps(&s);
-        assert!((median_period_s(&t).unwrap() - 0.1).abs() < 1e-9);
+        assert!((t.median_period_s().unwrap() - 0.1).abs() < 1e-9);
         let g = gaps(&t);
         assert_eq!(g.count, 1);
         assert!((g.longest_s - 2.1).abs() < 1e-9);

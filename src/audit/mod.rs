@@ -380,7 +380,9 @@ fn source_audit(
         file: found.file_of(&s.label).map(|p| p.display().to_string()),
         reference: i == 0,
         samples: s.trajectory.len(),
-        rate_hz: coverage::median_period_s(&s.trajectory)
+        rate_hz: s
+            .trajectory
+            .median_period_s()
             .filter(|p| *p > 0.0)
             .map(|p| 1.0 / p),
         gaps: coverage::gaps(&s.trajectory),

@@ -144,7 +144,7 @@ pub const CHAINED_MAX_RATE_HZ: f64 = 10.0;
 /// `l` with every k-th sample kept so that its median rate is at most `max_hz`; `None` when it is
 /// already.
 fn thinned(l: &Loaded, max_hz: f64) -> Option<Loaded> {
-    let period_s = super::coverage::median_period_s(&l.trajectory)?;
+    let period_s = l.trajectory.median_period_s()?;
     let k = (1.0 / (period_s * max_hz)).ceil();
     if !(k.is_finite() && k >= 2.0) {
         return None;

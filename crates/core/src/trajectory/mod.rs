@@ -143,4 +143,28 @@ impl Trajectory {
     pub fn span_ns(&self) -> Option<(i64, i64)> {
         Some((*self.stamps_ns.first()?, *self.stamps_ns.last()?))
     }
+
+    /// The typical sampling period, seconds: the median interval between consecutive stamps,
+    /// taken on the integer stamps by selection (the upper of the two middle intervals for an even
+    /// count, as [`crate::stats::median_step`] on seconds); `None` with fewer than two samples.
+    /// Gaps and jitter barely move it.
+    ///
+    /// ```
+    /// use trajdrift_core::trajectory::Trajectory;
+    /// use nalgebra::Vector3;
+    /// let mut t = Trajectory::new(false);
+    /// for ns in [0, 100_000_000, 200_000_000, 1_200_000_000] {
+    ///     t.push(ns, Vector3::zeros(), None);
+    /// }
+    /// assert_eq!(t.median_period_s(), Some(0.1));
+    /// assert_eq!(Trajectory::new(false).median_period_s(), None);
+    /// ```
+    pub fn median_period_s(&self) -> Option<f64> {
+        let mut d: Vec<i64> = self.stamps_ns.windows(2).map(|w| w[1] - w[0]).collect();
+        if d.is_empty() {
+            return None;
+        }
+        let k = d.len() / 2;
+        Some(*d.select_nth_unstable(k).1 as f64 * 1e-9)
+    }
 }

@@ -101,9 +101,10 @@ pub fn standard_metrics(
     let aligned = Pipeline {
         alignment: Alignment::Se3,
         sync: super::SyncMethod::Interpolation,
-        t_max_diff_s: median_period_s(reference)
-            .max(median_period_s(&estimate))
-            .max(0.01),
+        t_max_diff_s: [reference, &estimate]
+            .iter()
+            .filter_map(|t| t.median_period_s())
+            .fold(0.01, f64::max),
         ..Pipeline::default()
     };
     let oriented = reference.orientations.is_some() && estimate.orientations.is_some();
@@ -154,15 +155,4 @@ pub fn standard_metrics(
         }
     }
     out
-}
-
-/// The median interval between consecutive stamps, seconds (0 with fewer than two samples).
-fn median_period_s(t: &Trajectory) -> f64 {
-    let mut d: Vec<i64> = t.stamps_ns.windows(2).map(|w| w[1] - w[0]).collect();
-    if d.is_empty() {
-        return 0.0;
-    }
-    let k = d.len() / 2;
-    let (_, m, _) = d.select_nth_unstable(k);
-    *m as f64 * 1e-9
 }
