@@ -28,8 +28,11 @@ over the mean speed, what the signal searches read as a clock offset), the summa
 acceptance asks of constant clocks (the |error| median and worst, the share 2σ covers, the median
 |error|/σ, σ above 50 ms at an error below 10 ms, and clock alarms), a table per kind (applied,
 |error| median and worst, within 10 ms, 2σ covers, confident misses: off by more than 50 ms and
-2σ) and one of the walking robots per estimate rate. Mission k of a kind in seed set S has the
-seed 1000·S + 100·(the kind's index) + k. Needs NumPy.
+2σ), one of the walking robots per estimate rate and one per robot and reference rate (the median
+|error| against the median formal σ). Mission k of a kind in seed set S has the seed
+1000·S + 100·(the kind's index) + k. `--only vehicles` (or `walking`) grades those robots alone;
+`--without heading-drift bias-wander` leaves those error sources out of the same missions, to
+measure what they cost. Needs NumPy.
 """
 
 import argparse
@@ -85,7 +88,10 @@ def sinusoids(rng, t, n, f_lo, f_hi, amp):
     return out
 
 
-def mission(kind, seed):
+def mission(kind, seed, without=()):
+    """One mission of `kind`; `without` names error sources to leave out ("heading-drift": the
+    estimate's heading random walk, "bias-wander": the reference's wandering bias), each drawn and
+    then zeroed, so that every other draw of the seed stays the same."""
     rng = np.random.default_rng(seed)
     legged = kind in ("legged", "turns") or (kind in ("outages", "receipt") and rng.random() < 0.5)
     duration = rng.uniform(480.0, 900.0)
@@ -164,6 +170,8 @@ def mission(kind, seed):
     a = math.exp(-1.0 / (100.0 * ref_hz))
     for i in range(1, len(t_ref)):
         bias[i] = a * bias[i - 1] + math.sqrt(1 - a * a) * 0.01 * rng.standard_normal(3)
+    if "bias-wander" in without:
+        bias[:] = 0.0
     ref = at(ref_point, t_ref) + bias + noise_m * rng.standard_normal((len(t_ref), 3))
     stamps_ref = t_ref + (rng.exponential(lat_ref, len(t_ref)) if lat_ref else 0.0)
 
@@ -173,6 +181,8 @@ def mission(kind, seed):
     # truth as large as a legged mission's σ).
     est_vel = np.diff(est_point, axis=0, prepend=est_point[:1]) / dt
     heading_err = np.cumsum(rng.standard_normal(len(t)) * rng.uniform(0.0005, 0.002) * math.sqrt(dt))
+    if "heading-drift" in without:
+        heading_err[:] = 0.0
     scale = 1.0 + rng.choice([-1, 1]) * rng.uniform(0.01, 0.03)
     drift_rot = rot_z(heading_err)
     est_pos = np.cumsum(np.einsum("nij,nj->ni", drift_rot, est_vel) * scale, axis=0) * dt
@@ -236,6 +246,14 @@ def main():
     ap.add_argument("--missions", type=int, default=10, help="missions of each kind")
     ap.add_argument("--seed", type=int, nargs="+", default=[1], help="one or more seed sets")
     ap.add_argument("--keep", metavar="DIR", help="keep each mission's TUM files and truth in DIR")
+    ap.add_argument("--only", choices=["vehicles", "walking"], help="grade only these robots")
+    ap.add_argument(
+        "--without",
+        nargs="+",
+        default=[],
+        choices=["heading-drift", "bias-wander"],
+        help="leave these error sources out (what limits the answers: the other draws stay the same)",
+    )
     args = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as workdir:
@@ -243,7 +261,9 @@ def main():
             for kind in KINDS:
                 for k in range(args.missions):
                     seed = first * 1000 + KINDS.index(kind) * 100 + k
-                    ref, est, info = mission(kind, seed)
+                    ref, est, info = mission(kind, seed, args.without)
+                    if args.only and info["legged"] != (args.only == "walking"):
+                        continue
                     if args.keep:
                         os.makedirs(args.keep, exist_ok=True)
                         write_tum(os.path.join(args.keep, f"{kind}{seed}_ref.tum"), *ref)
@@ -258,7 +278,18 @@ def main():
                     err = o["offset_s"] - info["truth_s"]
                     sigma = o.get("sigma_s")
                     alarm = any(c in ("clock_drift_suspected", "clock_step_suspected") for c in codes)
-                    rows.append(dict(info, kind=kind, error_s=err, sigma_s=sigma, model=o.get("model"), method=o.get("method"), alarm=alarm))
+                    rows.append(
+                        dict(
+                            info,
+                            kind=kind,
+                            error_s=err,
+                            sigma_s=sigma,
+                            formal_s=(o.get("sigma_parts") or {}).get("formal_s"),
+                            model=o.get("model"),
+                            method=o.get("method"),
+                            alarm=alarm,
+                        )
+                    )
                     print(
                         f"{kind:9} {seed:6} {'legged' if info['legged'] else 'ground':6} ref {info['ref_hz']:4.0f} Hz est {info['est_hz']:4.0f} Hz "
                         f"noise {info['noise_mm']:4.1f} mm  error {1e3 * err:+7.2f} ms  σ {1e3 * (sigma or float('nan')):6.2f} ms  "
@@ -297,8 +328,9 @@ def main():
         )
     # Walking robots by the estimate's rate: a gait of 1.4–2.6 Hz bobs at twice that, near the
     # Nyquist rate of a 10 Hz estimate, where the error bar is weakest.
-    print("\n| walking robots, estimate at | missions | |error| median ms | 2σ covers | beyond 3σ |")
-    print("|---|---|---|---|---|")
+    if any(r["legged"] for r in ok):
+        print("\n| walking robots, estimate at | missions | |error| median ms | 2σ covers | beyond 3σ |")
+        print("|---|---|---|---|---|")
     for hz in sorted({r["est_hz"] for r in ok if r["legged"]}):
         got = [r for r in ok if r["legged"] and r["est_hz"] == hz]
         z = [abs(r["error_s"]) / r["sigma_s"] for r in got]
@@ -306,6 +338,21 @@ def main():
             f"| {hz:.0f} Hz | {len(got)} | {statistics.median(abs(r['error_s']) * 1e3 for r in got):.1f} | "
             f"{100 * sum(x <= 2 for x in z) / len(z):.0f} % | {sum(x > 3 for x in z)} |"
         )
+    # By the reference's rate: the median error against the median formal σ (what white residuals
+    # of the fit would give, the lever fitted): where the two are alike, the answers are as good as
+    # the reference's samples allow the fit.
+    print("\n| robot | reference at | missions | |error| median ms | formal σ median ms | σ median ms |")
+    print("|---|---|---|---|---|---|")
+    for legged in (False, True):
+        for hz in sorted({r["ref_hz"] for r in ok if r["legged"] == legged}):
+            got = [r for r in ok if r["legged"] == legged and r["ref_hz"] == hz]
+            formal = [r["formal_s"] * 1e3 for r in got if r.get("formal_s")]
+            print(
+                f"| {'walking' if legged else 'vehicle'} | {hz:.0f} Hz | {len(got)} | "
+                f"{statistics.median(abs(r['error_s']) * 1e3 for r in got):.1f} | "
+                f"{statistics.median(formal) if formal else float('nan'):.1f} | "
+                f"{statistics.median(r['sigma_s'] * 1e3 for r in got):.1f} |"
+            )
 
 
 if __name__ == "__main__":
