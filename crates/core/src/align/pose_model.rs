@@ -15,7 +15,8 @@
 //!    when the windows' calibrated σ refute one constant (BIC margin), a step only with two windows
 //!    of support on each side.
 //! 4. **Final fit.** The chosen model's parameters (constant; offset and drift; one offset per
-//!    segment) fitted again with D over every window. Their σ come from the mission's windows twice:
+//!    segment) fitted again with D over every window; a drift below the resolution, or steps whose
+//!    sides this fit does not tell apart ([`steps_resolved`]), become the constant. Their σ come from the mission's windows twice:
 //!    the jackknife over the windows of that fit (D free; at least its formal σ, see
 //!    [`crate::align::pose_fit`]), and the profile's windows for the same parameter (their
 //!    calibrated σ combined and raised by their scatter about it, D held; the signal searches' 2 ms
@@ -125,6 +126,9 @@ pub const MIN_POOLED_WINDOWS: usize = 3;
 /// A drift below the resolution enters the constant's σ only when the profile's line measures it
 /// beyond this many of its σ (see the module doc).
 pub const HIDDEN_DRIFT_Z: f64 = 2.0;
+/// A clock step the windows chose is kept only where the final fit tells its two sides apart by
+/// more than this many σ of their difference (see `Mission::resolved`).
+pub const STEP_RESOLUTION_Z: f64 = 3.0;
 /// Every profile window is searched for a deeper root unless the whole mission's constant has a σ
 /// within this, seconds (see `Mission::window_search`).
 pub const DEEP_SEARCH_SIGMA_S: f64 = 0.002;
@@ -251,7 +255,7 @@ pub fn pose_clock_model(
     // (`lead_searched`): across a true clock step the constant trades its lever for Δt as well,
     // and the other segment's basin fits better, so a far constant replaces the chosen model only
     // when the profile measured from it chooses a constant too.
-    // A drift the final fit leaves below the resolution (`drift_resolved`) becomes a constant after
+    // A drift the final fit leaves below the resolution (`resolved`) becomes a constant after
     // this: the windows chose a drift there, and the search is not run.
     // The near fit: the whole mission's, or without one the chosen constant's.
     let near = mission.whole.clone().or_else(|| chosen.fit.clone());
@@ -311,7 +315,7 @@ pub fn pose_clock_model(
             .map(|pc| PoseClock { replaced, ..pc });
     };
     let (profile, mut model) = (chosen.profile, chosen.model);
-    let last = mission.drift_resolved(&mut model, last);
+    let last = mission.resolved(&mut model, last);
     let valley_s = match (&lead, model.model) {
         (Some(lead), OffsetModel::Constant) => lead.valley_s(&data, &last),
         _ => 0.0,
@@ -880,8 +884,39 @@ impl Mission<'_, '_> {
     /// drift exceeds the resolution of the windows (the drift their calibrated σ can tell from a
     /// constant clock); below it the data do not refute the constant, whatever the windows' BIC
     /// said (receipt-stamp latencies or a gait tilt a few windows), and the model becomes the whole
-    /// mission's constant. Never when the model was forced.
-    fn drift_resolved(&self, model: &mut ClockModel, last: PoseFit) -> PoseFit {
+    /// mission's constant. So too a step: kept only where the final fit tells some two neighbouring
+    /// segments apart ([`steps_resolved`]); otherwise the model is the whole mission's constant, or
+    /// where there was none (the fit from the signal searches' answer went to another basin) the
+    /// constant fitted from the segments' mean with their lever. A profile measured in another
+    /// basin than the fit's (a walking robot's windows with the lever held, where Δt trades
+    /// against it) can slope across the mission and propose a step whose two sides the fit then
+    /// finds 6 ms apart under σ of 14 ms: not a clock event. Never when the model was forced.
+    fn resolved(&self, model: &mut ClockModel, last: PoseFit) -> PoseFit {
+        if let (None, OffsetModel::Piecewise) = (self.forced, model.model) {
+            if !steps_resolved(&last) {
+                let constant = self.whole.clone().or_else(|| {
+                    let mean = last.theta.iter().sum::<f64>() / last.theta.len() as f64;
+                    pose_fit::fit(
+                        self.data,
+                        &self.windows,
+                        ClockShape::Constant,
+                        vec![mean],
+                        last.lever_m,
+                        true,
+                    )
+                    .filter(|f| f.converged)
+                });
+                if let Some(w) = constant {
+                    model.model = OffsetModel::Constant;
+                    model.segments.clear();
+                    model.criterion = format!(
+                        "{}; the fit does not tell the segments apart (each step within {STEP_RESOLUTION_Z} σ)",
+                        model.criterion
+                    );
+                    return w;
+                }
+            }
+        }
         if self.forced.is_none() && model.model == OffsetModel::Linear {
             let fitted_ppm = -last.theta[1] * 1e6;
             if let (Some(resolution), Some(w)) = (model.drift_resolution_ppm, &self.whole) {
@@ -897,6 +932,20 @@ impl Mission<'_, '_> {
         }
         last
     }
+}
+
+/// Whether a piecewise fit tells some two neighbouring segments apart: their offsets differ by more
+/// than [`STEP_RESOLUTION_Z`] σ of the difference (from the fit's covariance, at least
+/// [`POSE_SIGMA_FLOOR_S`] on each side). True for a fit of one segment.
+pub fn steps_resolved(fit: &PoseFit) -> bool {
+    let c = &fit.covariance;
+    let floor = 2.0 * POSE_SIGMA_FLOOR_S * POSE_SIGMA_FLOOR_S;
+    let steps = fit.theta.len().saturating_sub(1);
+    steps == 0
+        || (0..steps).any(|k| {
+            let var = c[(k, k)] + c[(k + 1, k + 1)] - 2.0 * c[(k, k + 1)];
+            (fit.theta[k + 1] - fit.theta[k]).abs() > STEP_RESOLUTION_Z * var.max(floor).sqrt()
+        })
 }
 
 /// Step 4: `model`'s parameters and their σ from its fit `last` (σ at least
@@ -1174,6 +1223,41 @@ mod tests {
 
     fn close(a: f64, b: f64) -> bool {
         (a - b).abs() < 1e-12
+    }
+
+    #[test]
+    fn a_step_is_resolved_only_beyond_three_sigma_of_the_difference_of_its_sides() {
+        let two = |d: f64, var: f64, cov: f64| {
+            let mut f = fit(
+                ClockShape::Piecewise {
+                    changes: vec![100.0],
+                },
+                vec![0.2, 0.2 + d],
+                vec![var.sqrt(); 2],
+            );
+            f.covariance = DMatrix::from_row_slice(2, 2, &[var, cov, cov, var]);
+            f
+        };
+        // 6 ms under σ 14 ms on each side, uncorrelated: not a step.
+        assert!(!steps_resolved(&two(0.006, 0.014f64.powi(2), 0.0)));
+        // 100 ms: a step.
+        assert!(steps_resolved(&two(0.1, 0.014f64.powi(2), 0.0)));
+        // Sides that share most of their error (the lever's, which moves both alike): with 96 % of
+        // the variance shared the difference is known to 4.0 ms, and 6 ms is within 3σ of it;
+        // with 98 %, to 2.8 ms, and 10 ms is beyond.
+        assert!(!steps_resolved(&two(
+            0.006,
+            0.014f64.powi(2),
+            0.96 * 0.014f64.powi(2)
+        )));
+        assert!(steps_resolved(&two(
+            0.010,
+            0.014f64.powi(2),
+            0.98 * 0.014f64.powi(2)
+        )));
+        // One segment: nothing to resolve.
+        let one = fit(ClockShape::Constant, vec![0.2], vec![0.01]);
+        assert!(steps_resolved(&one));
     }
 
     #[test]
