@@ -16,9 +16,9 @@
 //!    of support on each side.
 //! 4. **Final fit.** The chosen model's parameters (constant; offset and drift; one offset per
 //!    segment) fitted again with D over every window; a drift below the resolution, or steps whose
-//!    sides this fit does not tell apart ([`steps_resolved`]), become the constant. Their σ come from the mission's windows twice:
-//!    the jackknife over the windows of that fit (D free; at least its formal σ, see
-//!    [`crate::align::pose_fit`]), and the profile's windows for the same parameter (their
+//!    sides this fit does not tell apart ([`steps_resolved`]), become the constant. Their σ come
+//!    from the mission's windows twice: the jackknife over the windows of that fit (D free; at
+//!    least its formal σ, see [`crate::align::pose_fit`]), and the profile's windows for the same parameter (their
 //!    calibrated σ combined and raised by their scatter about it, D held; the signal searches' 2 ms
 //!    floor is not theirs). An offset's σ (the constant's, each segment's) is the mean of the two
 //!    variances, at least the formal σ (over at least [`MIN_POOLED_WINDOWS`] windows and where the
@@ -890,7 +890,7 @@ impl Mission<'_, '_> {
     /// constant fitted from the segments' mean with their lever. A profile measured in another
     /// basin than the fit's (a walking robot's windows with the lever held, where Δt trades
     /// against it) can slope across the mission and propose a step whose two sides the fit then
-    /// finds 6 ms apart under σ of 14 ms: not a clock event. Never when the model was forced.
+    /// finds 6 ms apart under σ of 14–40 ms: not a clock event. Never when the model was forced.
     fn resolved(&self, model: &mut ClockModel, last: PoseFit) -> PoseFit {
         if let (None, OffsetModel::Piecewise) = (self.forced, model.model) {
             if !steps_resolved(&last) {
