@@ -18,8 +18,8 @@
 //!    segment) fitted again with D over every window; a drift below the resolution, or steps whose
 //!    sides this fit does not tell apart ([`steps_resolved`]), become the constant. Their σ come
 //!    from the mission's windows twice: the jackknife over the windows of that fit (D free; at
-//!    least its formal σ, see [`crate::align::pose_fit`]), and the profile's windows for the same parameter (their
-//!    calibrated σ combined and raised by their scatter about it, D held; the signal searches' 2 ms
+//!    least its formal σ, see [`crate::align::pose_fit`]), and the profile's windows for the same
+//!    parameter (their calibrated σ combined and raised by their scatter about it, D held; the signal searches' 2 ms
 //!    floor is not theirs). An offset's σ (the constant's, each segment's) is the mean of the two
 //!    variances, at least the formal σ (over at least [`MIN_POOLED_WINDOWS`] windows and where the
 //!    jackknife saw a spread; otherwise the larger): each alone is an estimate from 8–30 windows, noisy from
