@@ -19,18 +19,18 @@
 //!    sides this fit does not tell apart ([`steps_resolved`]), become the constant. Their σ come
 //!    from the mission's windows twice: the jackknife over the windows of that fit (D free; at
 //!    least its formal σ, see [`crate::align::pose_fit`]), and the profile's windows for the same
-//!    parameter (their calibrated σ combined and raised by their scatter about it, D held; the signal searches' 2 ms
-//!    floor is not theirs). An offset's σ (the constant's, each segment's) is the mean of the two
-//!    variances, at least the formal σ (over at least [`MIN_POOLED_WINDOWS`] windows and where the
-//!    jackknife saw a spread; otherwise the larger): each alone is an estimate from 8–30 windows, noisy from
-//!    mission to mission, and the larger of two noisy estimates is biased wide (taking it, the
-//!    constant clocks' median |error|/σ was 0.595 against a Gaussian's 0.674 and 2σ covered 96 %;
-//!    pooled, 0.674 and 95 %, and scaled to the same median fewer errors beyond 2.5σ: 30 of 1399
-//!    against 36; docs/evidence.md, "Two estimates of σ, pooled"). The line's σ (offset at t_mid
-//!    and drift) stay the fit's, at least the windows': there the windows' line is the narrower
-//!    (alone its median |error|/σ is 1.02), and pooling would take the declared drifts' 2σ coverage
-//!    from 95 % to 93 %. The report's `time_offset.sigma_parts` gives the pieces and the rule
-//!    ([`SigmaParts`]).
+//!    parameter (their calibrated σ combined and raised by their scatter about it, D held; the
+//!    signal searches' 2 ms floor is not theirs). An offset's σ (the constant's, each segment's) is
+//!    the mean of the two variances, at least the formal σ (over at least [`MIN_POOLED_WINDOWS`]
+//!    windows and where the jackknife saw a spread; otherwise the larger): each alone is an
+//!    estimate from 8–30 windows, noisy from mission to mission, and the larger of two noisy
+//!    estimates is biased wide (taking it, the constant clocks' median |error|/σ was 0.595 against
+//!    a Gaussian's 0.674 and 2σ covered 96 %; pooled, 0.674 and 95 %, and scaled to the same median
+//!    fewer errors beyond 2.5σ: 30 of 1399 against 36; docs/evidence.md, "Two estimates of σ,
+//!    pooled"). The line's σ (offset at t_mid and drift) stay the fit's, at least the windows':
+//!    there the windows' line is the narrower (alone its median |error|/σ is 1.02), and pooling
+//!    would take the declared drifts' 2σ coverage from 95 % to 93 %. The report's
+//!    `time_offset.sigma_parts` gives the pieces and the rule ([`SigmaParts`]).
 //!
 //! **The lead search.** The signal searches read a sensor ahead of the other as a clock offset of
 //! lever/speed (at a walk, a 0.3 m lever is a second), and the fit from there stays in the long
@@ -127,7 +127,7 @@ pub const MIN_POOLED_WINDOWS: usize = 3;
 /// beyond this many of its σ (see the module doc).
 pub const HIDDEN_DRIFT_Z: f64 = 2.0;
 /// A clock step the windows chose is kept only where the final fit tells its two sides apart by
-/// more than this many σ of their difference (see `Mission::resolved`).
+/// more than this many σ of their difference (see [`steps_resolved`]).
 pub const STEP_RESOLUTION_Z: f64 = 3.0;
 /// Every profile window is searched for a deeper root unless the whole mission's constant has a σ
 /// within this, seconds (see `Mission::window_search`).
