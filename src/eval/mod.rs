@@ -558,7 +558,8 @@ impl OffsetSearch<'_> {
     /// are noise; on walking robots a confident speed search matched at a wrong lag contradicts
     /// signed curvature's lead). A fit counts when it converged with its lever (its σ has its
     /// parts), tells the forward lever from Δt (at a constant speed nothing does, and the answer
-    /// stays weak), and stayed within [`MAX_DISAGREEMENT_S`] of its start or the lead search, which
+    /// stays weak) or, where the lever inflates Δt's variance beyond the inseparable mark, still
+    /// pins Δt within [`RESCUE_SIGMA_S`] with the lever fitted, and stayed within [`MAX_DISAGREEMENT_S`] of its start or the lead search, which
     /// judges the basins it compares on every window, moved it; of those, the one with the least
     /// mean squared residual over its windows is applied, the reason saying where it started.
     /// `None` when none counts.
@@ -596,8 +597,9 @@ impl OffsetSearch<'_> {
                 };
                 let posed = self.pose_refined(&start, &searched.methods, Starts::AnswerOnly)?;
                 let near = (posed.report.offset_s - offset_s).abs() <= MAX_DISAGREEMENT_S;
-                let separable = posed.report.fitted_forward_separable == Some(true);
-                (posed.report.sigma_parts.is_some() && separable && (near || posed.lead_moved))
+                let told = posed.report.fitted_forward_separable == Some(true)
+                    || posed.report.sigma_s.is_some_and(|s| s <= RESCUE_SIGMA_S);
+                (posed.report.sigma_parts.is_some() && told && (near || posed.lead_moved))
                     .then_some((method, offset_s, posed))
             })
             .min_by(|a, b| a.2.mse_m2.total_cmp(&b.2.mse_m2))?;
@@ -801,6 +803,15 @@ fn applied_report(
         ..report
     }
 }
+
+/// A weak search is rescued by a pose fit whose lever inflates Δt's variance beyond
+/// [`crate::align::pose_fit::INSEPARABLE_VIF`] when its σ, the lever fitted, is within this,
+/// seconds: the σ already carries what the lever could move Δt by, so a narrow one is an answer
+/// (a vehicle on a 1 Hz reference: inflation 26, σ 11 ms, 0.8 ms off, where applying nothing left
+/// it 15 ms off and reported the curvature search's −74 ms; docs/evidence.md, "A weak search
+/// rescued where the lever inflates σ but leaves it narrow"). A straight line at a constant speed
+/// still stays weak (the command line's test `weak_offset_exits_3_and_still_writes_json`).
+const RESCUE_SIGMA_S: f64 = 0.05;
 
 /// Where the pose fit may start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
