@@ -559,10 +559,10 @@ impl OffsetSearch<'_> {
     /// signed curvature's lead). A fit counts when it converged with its lever (its σ has its
     /// parts), tells the forward lever from Δt (at a constant speed nothing does, and the answer
     /// stays weak) or, where the lever inflates Δt's variance beyond the inseparable mark, still
-    /// pins Δt within [`RESCUE_SIGMA_S`] with the lever fitted, and stayed within [`MAX_DISAGREEMENT_S`] of its start or the lead search, which
-    /// judges the basins it compares on every window, moved it; of those, the one with the least
-    /// mean squared residual over its windows is applied, the reason saying where it started.
-    /// `None` when none counts.
+    /// pins Δt within [`RESCUE_SIGMA_S`] with the lever fitted, and stayed within
+    /// [`MAX_DISAGREEMENT_S`] of its start or the lead search, which judges the basins it compares
+    /// on every window, moved it; of those, the one with the least mean squared residual over its
+    /// windows is applied, the reason saying where it started. `None` when none counts.
     ///
     /// [`MAX_DISAGREEMENT_S`]: crate::align::pose_model::MAX_DISAGREEMENT_S
     fn pose_rescued(
