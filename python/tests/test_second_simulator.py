@@ -5,9 +5,8 @@ found a fault, held by the command line of the environment under test: each is d
 from __future__ import annotations
 
 import importlib.util
-import json
 
-from conftest import REPO, run_cli
+from conftest import REPO, trajdrift_command
 
 
 def independent_missions():
@@ -19,15 +18,12 @@ def independent_missions():
 
 
 def time_offset(tmp_path, kind: str, seed: int) -> tuple[dict, dict]:
+    """The mission's `time_offset` report, by the simulator's own `evaluate`, and its truth."""
     sim = independent_missions()
     ref, est, info = sim.mission(kind, seed)
-    ref_path, est_path, out = tmp_path / "ref.tum", tmp_path / "est.tum", tmp_path / "report.json"
-    sim.write_tum(ref_path, *ref)
-    sim.write_tum(est_path, *est)
-    r = run_cli("eval", "--reference-file", str(ref_path), "--estimate-file", f"est={est_path}",
-                "--json", str(out), "--quiet")
-    assert r.returncode in (0, 3), r.stderr
-    return json.loads(out.read_text())["estimates"][0]["time_offset"], info
+    o, codes = sim.evaluate(trajdrift_command(), ref, est, str(tmp_path))
+    assert o is not None, codes
+    return o, info
 
 
 def test_a_weak_search_is_rescued_where_the_lever_inflates_sigma_but_leaves_it_narrow(tmp_path):

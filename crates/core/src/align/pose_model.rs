@@ -887,10 +887,11 @@ impl Mission<'_, '_> {
     /// mission's constant. So too a step: kept only where the final fit tells some two neighbouring
     /// segments apart ([`steps_resolved`]); otherwise the model is the whole mission's constant, or
     /// where there was none (the fit from the signal searches' answer went to another basin) the
-    /// constant fitted from the segments' mean with their lever. A profile measured in another
-    /// basin than the fit's (a walking robot's windows with the lever held, where Δt trades
-    /// against it) can slope across the mission and propose a step whose two sides the fit then
-    /// finds 6 ms apart under σ of 14–40 ms: not a clock event. Never when the model was forced.
+    /// constant fitted from the segments' mean with their lever (where that fit does not converge,
+    /// the steps stand). A profile measured in another basin than the fit's (a walking robot's
+    /// windows with the lever held, where Δt trades against it) can slope across the mission and
+    /// propose a step whose two sides the fit then finds 6 ms apart under σ of 14–40 ms: not a
+    /// clock event. Never when the model was forced.
     fn resolved(&self, model: &mut ClockModel, last: PoseFit) -> PoseFit {
         if let (None, OffsetModel::Piecewise) = (self.forced, model.model) {
             if !steps_resolved(&last) {
