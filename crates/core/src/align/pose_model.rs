@@ -541,6 +541,17 @@ fn narrowed<'d>(data: &PoseData<'d>) -> PoseData<'d> {
     }
 }
 
+/// `data` with the lead search's iterations, [`pose_fit::LEAD_MAX_ITERATIONS`].
+fn patient<'d>(data: &PoseData<'d>) -> PoseData<'d> {
+    PoseData {
+        params: pose_fit::PoseFitParams {
+            max_iterations: pose_fit::LEAD_MAX_ITERATIONS,
+            ..data.params
+        },
+        ..*data
+    }
+}
+
 /// Two constant fits in one basin: their Δt within [`SAME_BASIN_S`].
 fn same_basin(a: &PoseFit, b: &PoseFit) -> bool {
     (a.theta[0] - b.theta[0]).abs() <= SAME_BASIN_S
@@ -590,8 +601,10 @@ fn lead_search(
         LEAD_MINIMA + 1,
     );
     // The fit from each minimum, its lever the scan's there, or none when that does not converge
-    // (a lever settled on a sample of the windows can start the fit outside the basin).
-    let narrow = narrowed(data);
+    // (a lever settled on a sample of the windows can start the fit outside the basin). Given
+    // `LEAD_MAX_ITERATIONS`: along the valley a fit can creep toward its root.
+    let narrow = patient(&narrowed(data));
+    let data = &patient(data);
     let fit_in = |data: &PoseData<'_>, theta: f64, lever: Vector3<f64>| {
         pose_fit::fit(
             data,

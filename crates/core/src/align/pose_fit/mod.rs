@@ -101,6 +101,7 @@ pub use profile::{
     profile, scatter_calibration, scatter_factor, WindowOffset, WindowScatter, WindowSearch,
 };
 pub use shared::{coarse_minima, coarse_start, fit, window_residuals, ScanMinimum};
+pub use shared::{LEAD_MAX_ITERATIONS, MAX_ITERATIONS};
 pub use window::{locate_change, windows, Window};
 
 /// Length of a window, seconds (a window holds at least [`MIN_WINDOW_SAMPLES`] reference samples:
@@ -298,6 +299,9 @@ pub struct PoseFitParams {
     /// samples and their predictions are averaged over two of the estimate's periods
     /// ([`AVERAGE_BELOW_HZ`]; 0 never).
     pub average_below_hz: f64,
+    /// Gauss–Newton iterations at most of a fit of the shared parameters ([`MAX_ITERATIONS`];
+    /// the lead search's fits from its minima take [`LEAD_MAX_ITERATIONS`]).
+    pub max_iterations: usize,
 }
 
 impl PoseFitParams {
@@ -313,6 +317,7 @@ impl PoseFitParams {
             scale_prior_m: SCALE_PRIOR_M,
             jacobian_periods: JACOBIAN_PERIODS,
             average_below_hz: AVERAGE_BELOW_HZ,
+            max_iterations: MAX_ITERATIONS,
         }
     }
 }

@@ -94,6 +94,8 @@ pub(super) struct Problem<'a> {
     /// reference's median period, seconds.
     block: usize,
     ref_period_s: f64,
+    /// Gauss–Newton iterations at most ([`super::PoseFitParams::max_iterations`]).
+    max_iterations: usize,
 }
 
 /// One point of a window: reference position, the estimate's position ê, u = ê − R̂·D, ∂u/∂Δt
@@ -192,6 +194,11 @@ fn stretches(pts: Vec<Pt>) -> Vec<Vec<Pt>> {
 }
 
 impl Problem<'_> {
+    /// Gauss–Newton iterations at most of a fit of the shared parameters.
+    pub(super) fn max_iterations(&self) -> usize {
+        self.max_iterations
+    }
+
     /// The reduced normal equations of window `w` for the clock `shape`/`theta` (its parameters
     /// first) and, when `with_lever`, the lever D (the last three); `d` is the lever used either way.
     /// `s_bar`: the mission's scale (the prior's centre).
@@ -765,6 +772,7 @@ impl<'a> PoseData<'a> {
             scale_prior_m: self.params.scale_prior_m,
             block,
             ref_period_s,
+            max_iterations: self.params.max_iterations,
         }
     }
 }
