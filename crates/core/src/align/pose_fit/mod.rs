@@ -100,8 +100,10 @@ mod window;
 pub use profile::{
     profile, scatter_calibration, scatter_factor, WindowOffset, WindowScatter, WindowSearch,
 };
-pub use shared::{coarse_minima, coarse_start, fit, window_residuals, ScanMinimum};
-pub use shared::{LEAD_MAX_ITERATIONS, MAX_ITERATIONS};
+pub use shared::{
+    coarse_minima, coarse_start, fit, window_residuals, ScanMinimum, LEAD_MAX_ITERATIONS,
+    MAX_ITERATIONS,
+};
 pub use window::{locate_change, windows, Window};
 
 /// Length of a window, seconds (a window holds at least [`MIN_WINDOW_SAMPLES`] reference samples:

@@ -23,7 +23,8 @@ pub const MAX_ITERATIONS: usize = 60;
 /// 0.05 ms an iteration with the vertical lever and stopped unconverged after 60, 0.7 ms from the
 /// truth; it was dropped and the fit a lead away (614 ms off, σ 4 ms) stood. On the narrow
 /// Jacobian it converges in 164. The lead search runs on walking robots only, and only an
-/// unconverged fit pays for the iterations (docs/evidence.md, "A creeping fit given time").
+/// unconverged fit (or a jackknife refit of one of its windows) pays for the iterations
+/// (docs/evidence.md, "A creeping fit given time").
 pub const LEAD_MAX_ITERATIONS: usize = 240;
 /// The largest change of an offset parameter in one iteration, seconds.
 pub(super) const MAX_STEP_S: f64 = 0.1;
