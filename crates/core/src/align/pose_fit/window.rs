@@ -629,7 +629,22 @@ impl NormalSums {
     ) {
         let p = self.p;
         self.rss += e.norm_squared();
-        for a in 0..8 {
+        // The translation's columns are the unit vectors: their dot products are the other
+        // columns' components (the same sums, bit for bit, without the products by 0 and 1).
+        for a in 0..3 {
+            self.nte[a] += e[a];
+            for (b, cb) in cols.iter().enumerate().skip(a) {
+                self.ntn[(a, b)] += cb[a];
+            }
+            let rows = self.ntv[a * p..(a + 1) * p]
+                .iter_mut()
+                .zip(&mut self.ntx[a * p..(a + 1) * p]);
+            for ((sv, sx), (vb, xb)) in rows.zip(v.iter().zip(x)) {
+                *sv += vb[a];
+                *sx += xb[a];
+            }
+        }
+        for a in 3..8 {
             let ca = &cols[a];
             self.nte[a] += ca.dot(e);
             for (b, cb) in cols.iter().enumerate().skip(a) {
@@ -850,4 +865,91 @@ pub fn locate_change(
         tau = split;
     }
     located
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// The slow twin of [`NormalSums::add`]: every entry a dot product of two whole columns.
+    fn add_by_dots(
+        sums: &mut NormalSums,
+        e: &Vector3<f64>,
+        cols: &[Vector3<f64>; 8],
+        v: &[Vector3<f64>],
+        x: &[Vector3<f64>],
+    ) {
+        let p = sums.p;
+        sums.rss += e.norm_squared();
+        for a in 0..8 {
+            sums.nte[a] += cols[a].dot(e);
+            for b in a..8 {
+                sums.ntn[(a, b)] += cols[a].dot(&cols[b]);
+            }
+            for b in 0..p {
+                sums.ntv[a * p + b] += cols[a].dot(&v[b]);
+                sums.ntx[a * p + b] += cols[a].dot(&x[b]);
+            }
+        }
+        for a in 0..p {
+            sums.vte[a] += v[a].dot(e);
+            for b in 0..p {
+                if b >= a {
+                    sums.vtv[a * p + b] += v[a].dot(&v[b]);
+                }
+                sums.vtx[a * p + b] += v[a].dot(&x[b]);
+            }
+        }
+    }
+
+    /// The translation's rows taken as components give the dot products' sums bit for bit.
+    #[test]
+    fn the_sums_by_components_are_the_sums_by_dot_products() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let mut vec3 = || {
+            Vector3::new(
+                rng.random_range(-3.0..3.0),
+                rng.random_range(-3.0..3.0),
+                rng.random_range(-3.0..3.0),
+            )
+        };
+        let p = 4;
+        let (mut fast, mut slow) = (NormalSums::zeros(p), NormalSums::zeros(p));
+        for _ in 0..200 {
+            let e = vec3();
+            let wv = vec3();
+            let cols = [
+                Vector3::x(),
+                Vector3::y(),
+                Vector3::z(),
+                Vector3::x().cross(&wv),
+                Vector3::y().cross(&wv),
+                Vector3::z().cross(&wv),
+                wv,
+                vec3(),
+            ];
+            let v: Vec<Vector3<f64>> = (0..p).map(|_| vec3()).collect();
+            let x: Vec<Vector3<f64>> = (0..p).map(|_| vec3()).collect();
+            fast.add(&e, &cols, &v, &x);
+            add_by_dots(&mut slow, &e, &cols, &v, &x);
+        }
+        assert_eq!(fast.rss.to_bits(), slow.rss.to_bits());
+        for (a, b) in fast.ntn.iter().zip(slow.ntn.iter()) {
+            assert_eq!(a.to_bits(), b.to_bits());
+        }
+        for (a, b) in fast.nte.iter().zip(slow.nte.iter()) {
+            assert_eq!(a.to_bits(), b.to_bits());
+        }
+        for (f, s) in [
+            (&fast.ntv, &slow.ntv),
+            (&fast.ntx, &slow.ntx),
+            (&fast.vtv, &slow.vtv),
+            (&fast.vtx, &slow.vtx),
+            (&fast.vte, &slow.vte),
+        ] {
+            let bits = |w: &Vec<f64>| w.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(f), bits(s));
+        }
+    }
 }
