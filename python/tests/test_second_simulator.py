@@ -56,8 +56,8 @@ def test_a_fit_is_not_stopped_by_a_damping_that_ratcheted(tmp_path):
     # A vehicle on a 1 Hz reference with receipt stamps (100 Hz estimate, 17 mm of noise). Ten times
     # the damping after each rejected step and a third after each taken one ratcheted it to 1500 in
     # seven iterations: the whole mission's fit stopped on steps too small to move, and the answer
-    # came from a second fit, 46 ms off under σ 13 ms. With the damping doubling after a rejection,
-    # the first fit stands, 8.5 ms off under σ 17 ms.
+    # came from a second fit, 46 ms off under σ 13 ms. With the damping grown by 2, 4, 8, … after
+    # rejections in a row, the first fit stands, 8.5 ms off under σ 17 ms.
     o, info = time_offset(tmp_path, "receipt", 55507)
     error_s = o["offset_s"] - info["truth_s"]
     what = f"{o['method']} {o['status']} error {1e3 * error_s:+.1f} ms σ {o.get('sigma_s')}"
