@@ -26,6 +26,15 @@ def time_offset(tmp_path, kind: str, seed: int) -> tuple[dict, dict]:
     return o, info
 
 
+def applied_pose_error(o: dict, info: dict) -> tuple[float, str]:
+    """The error of the offset against the truth, seconds, and a line saying what came back;
+    asserts that the pose fit's answer is the one applied."""
+    error_s = o["offset_s"] - info["truth_s"]
+    what = f"{o['method']} {o['status']} error {1e3 * error_s:+.1f} ms σ {o.get('sigma_s')}"
+    assert o["method"] == "pose" and o["applied_s"] == o["offset_s"], what
+    return error_s, what
+
+
 def test_a_weak_search_is_rescued_where_the_lever_inflates_sigma_but_leaves_it_narrow(tmp_path):
     # A vehicle on a 1 Hz reference with 28 mm of noise: no search is confident, and the pose fit's
     # lever inflates Δt's variance 26 times (beyond the inseparable mark of 25) to a σ of 11 ms.
@@ -46,9 +55,7 @@ def test_a_lead_search_fit_that_creeps_along_the_valley_is_given_time(tmp_path):
     # the vertical lever and stopped unconverged after 60 iterations; the fit a lead away stood,
     # 614 ms off under σ 4 ms.
     o, info = time_offset(tmp_path, "outages", 61403)
-    error_s = o["offset_s"] - info["truth_s"]
-    what = f"{o['method']} {o['status']} error {1e3 * error_s:+.1f} ms σ {o.get('sigma_s')}"
-    assert o["method"] == "pose" and o["applied_s"] == o["offset_s"], what
+    error_s, what = applied_pose_error(o, info)
     assert abs(error_s) <= 0.01 and abs(error_s) <= 2 * o["sigma_s"] <= 0.05, what
 
 
@@ -59,7 +66,5 @@ def test_a_fit_is_not_stopped_by_a_damping_that_ratcheted(tmp_path):
     # came from a second fit, 46 ms off under σ 13 ms. With the damping grown by 2, 4, 8, … after
     # rejections in a row, the first fit stands, 8.5 ms off under σ 17 ms.
     o, info = time_offset(tmp_path, "receipt", 55507)
-    error_s = o["offset_s"] - info["truth_s"]
-    what = f"{o['method']} {o['status']} error {1e3 * error_s:+.1f} ms σ {o.get('sigma_s')}"
-    assert o["method"] == "pose" and o["applied_s"] == o["offset_s"], what
+    error_s, what = applied_pose_error(o, info)
     assert abs(error_s) <= 0.02 and abs(error_s) <= 2 * o["sigma_s"] <= 0.05, what
