@@ -296,7 +296,7 @@ struct Iterate {
 /// stopped unconverged, to 1500 in seven on one whose fit stopped on steps too small to move.
 /// With ×2 the pair leaves λ at 2/9 of itself, so it settles where the steps are taken; ten
 /// rejections in a row still reach 2⁵⁵ (docs/evidence.md, "The damping that ratcheted").
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy)]
 struct Damping {
     lambda: f64,
     growth: f64,
