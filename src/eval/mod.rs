@@ -597,8 +597,7 @@ impl OffsetSearch<'_> {
                 };
                 let posed = self.pose_refined(&start, &searched.methods, Starts::AnswerOnly)?;
                 let near = (posed.report.offset_s - offset_s).abs() <= MAX_DISAGREEMENT_S;
-                let told = posed.report.fitted_forward_separable == Some(true)
-                    || posed.report.sigma_s.is_some_and(|s| s <= RESCUE_SIGMA_S);
+                let told = pins_offset(posed.report.fitted_forward_separable, posed.report.sigma_s);
                 (posed.report.sigma_parts.is_some() && told && (near || posed.lead_moved))
                     .then_some((method, offset_s, posed))
             })
@@ -812,6 +811,16 @@ fn applied_report(
 /// rescued where the lever inflates σ but leaves it narrow"). A straight line at a constant speed
 /// still stays weak (the command line's test `weak_offset_exits_3_and_still_writes_json`).
 const RESCUE_SIGMA_S: f64 = 0.05;
+
+/// Whether a pose fit pins Δt well enough to rescue a weak search: it tells the forward lever from
+/// Δt (`separable`), or its σ with the lever fitted is within [`RESCUE_SIGMA_S`].
+///
+/// ```text
+/// separable, any σ → yes; inseparable, σ 11 ms → yes; inseparable, σ 0.2 s → no; no σ → no
+/// ```
+fn pins_offset(separable: Option<bool>, sigma_s: Option<f64>) -> bool {
+    separable == Some(true) || sigma_s.is_some_and(|s| s <= RESCUE_SIGMA_S)
+}
 
 /// Where the pose fit may start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -1157,5 +1166,19 @@ fn model_report(
         profile_window_s: Some(profile.window_s),
         profile_step_s: Some(profile.step_s),
         ..Default::default()
+    }
+}
+
+#[cfg(test)]
+mod rescue_tests {
+    use super::pins_offset;
+
+    #[test]
+    fn an_inseparable_fit_rescues_only_under_a_narrow_sigma() {
+        assert!(pins_offset(Some(true), Some(0.3)));
+        assert!(pins_offset(Some(false), Some(0.011)));
+        assert!(!pins_offset(Some(false), Some(0.2)));
+        assert!(!pins_offset(Some(false), None));
+        assert!(!pins_offset(None, Some(f64::NAN)));
     }
 }
