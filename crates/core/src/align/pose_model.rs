@@ -384,10 +384,12 @@ pub fn walking(moving_speed_mps: f64) -> bool {
 /// line. On a near-straight drive that is little, and the forward lever takes the rest. Odometry's
 /// scale error changes slowly (a wheel's radius, a lidar's near-unit scale), so a vehicle's windows
 /// are held to the mission's scale ([`pose_fit::VEHICLE_SCALE_PRIOR_M`]: a 20 s window at 1 m/s
-/// spreads 5.8 m per sample, its scale then mostly the mission's). On the second simulator's
-/// missions this took ground missions' median error from 7.5 to 2.8 ms and near-straight ones' from
-/// 10.7 to 2.0 ms (8.9 → 3.1 and 7.8 → 2.1 ms on seed sets drawn to check the choice;
-/// docs/evidence.md, "A vehicle's window scales held"). A walking robot ([`walking`]) keeps
+/// spreads 5.8 m per sample, its scale then the mission's). On the second simulator's
+/// missions a prior of 10 m took ground missions' median error from 7.5 to 2.8 ms and near-straight
+/// ones' from 10.7 to 2.0 ms (8.9 → 3.1 and 7.8 → 2.1 ms on seed sets drawn to check the choice;
+/// docs/evidence.md, "A vehicle's window scales held"); 30 m took the vehicles' median over 476
+/// missions from 3.2 to 2.8 ms, and above 10 ms from 62 to 48 (docs/evidence.md, "A vehicle's
+/// window scales held firmer"). A walking robot ([`walking`]) keeps
 /// [`pose_fit::SCALE_PRIOR_M`]: the firmer prior moved its missions between the gait's near-equal
 /// basins, both ways, and four of them read a false clock step.
 ///

@@ -155,8 +155,9 @@ pub const MIN_WINDOW_SAMPLES: usize = 20;
 /// sample, metres (the prior's weight is n·P²): P for a robot that walks, stands or turns in place
 /// (its windows spread a few metres; see `align::pose_model::scale_prior_m`).
 pub const SCALE_PRIOR_M: f64 = 1.0;
-/// P for a vehicle, metres (see `align::pose_model::scale_prior_m`).
-pub const VEHICLE_SCALE_PRIOR_M: f64 = 10.0;
+/// P for a vehicle, metres (see `align::pose_model::scale_prior_m`): a window spreading less than
+/// this per sample (a 20 s window at up to about 5 m/s) keeps mostly the mission's scale.
+pub const VEHICLE_SCALE_PRIOR_M: f64 = 30.0;
 /// A window's heading drift rate follows its own data only as far as they determine it better than
 /// this prior: σ 10⁻³ rad/s (0.06°/s) against 2 cm of noise per sample (weight n·(0.02/10⁻³)² m²s²).
 pub const DRIFT_PRIOR_M2S2: f64 = 400.0;
