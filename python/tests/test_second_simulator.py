@@ -35,7 +35,7 @@ def applied_pose_error(o: dict, info: dict) -> tuple[float, str]:
     return error_s, what
 
 
-def test_a_weak_search_is_rescued_where_the_lever_inflates_sigma_but_leaves_it_narrow(tmp_path):
+def test_a_weak_search_on_a_1hz_vehicle_is_rescued_by_the_pose_fit(tmp_path):
     # A vehicle on a 1 Hz reference with 28 mm of noise: no search is confident. The pose fit's
     # lever inflated Δt's variance 26 times (beyond the inseparable mark of 25) to a σ of 11 ms, and
     # nothing was applied (15 ms off; the report gave curvature's −74 ms) until such a fit counted

@@ -806,8 +806,9 @@ fn applied_report(
 /// A weak search is rescued by a pose fit whose lever inflates Δt's variance beyond
 /// [`crate::align::pose_fit::INSEPARABLE_VIF`] when its σ, the lever fitted, is within this,
 /// seconds: the σ already carries what the lever could move Δt by, so a narrow one is an answer
-/// (a vehicle on a 1 Hz reference: inflation 26, σ 11 ms, 0.8 ms off, where applying nothing left
-/// it 15 ms off and reported the curvature search's −74 ms; docs/evidence.md, "A weak search
+/// (a vehicle on a 1 Hz reference, before its windows' scale was held at 30 m: inflation 26, σ
+/// 11 ms, 0.8 ms off, where applying nothing left it 15 ms off and reported the curvature search's
+/// −74 ms; the rule is [`pins_offset`]; docs/evidence.md, "A weak search
 /// rescued where the lever inflates σ but leaves it narrow"). A straight line at a constant speed
 /// still stays weak (the command line's test `weak_offset_exits_3_and_still_writes_json`).
 const RESCUE_SIGMA_S: f64 = 0.05;
