@@ -1,6 +1,7 @@
 """How each way of making the pose fit's σ describes the errors, from `trajdrift validate` grades.
 
-Reproduces the figures of docs/evidence.md, "Two estimates of σ, pooled":
+Reproduces the figures of docs/evidence.md, "Two estimates of σ, pooled" and "The lever's share
+of σ":
 
     for s in 1 1000 2000 3000; do
         trajdrift validate --missions 50 --seed $s --json g$s.json
@@ -8,7 +9,7 @@ Reproduces the figures of docs/evidence.md, "Two estimates of σ, pooled":
     python3 tests/python/sigma_parts.py g1.json g1000.json g2000.json g3000.json
 
 Each grade carries the report's `sigma_parts` (the final fit's jackknife and formal σ, the profile
-windows' σ for the same parameter, the hidden drift) beside the error against the truth. For the
+windows' σ for the same parameter, the lever's share, the hidden drift) beside the error against the truth. For the
 constant clocks and for the declared drifts it prints, per rule, the median |error|/σ, the share
 2σ covers, and how many errors lie beyond 2.5σ once σ is scaled to a Gaussian's median (how well
 the rule tells the missions apart, whatever its overall size); then how often 30 constant clocks
@@ -42,12 +43,28 @@ RULES = {
     "larger of the three": lambda p, g: with_hidden(
         p, max(p["jackknife_s"], p["formal_s"], p["windows_s"] or 0.0, FLOOR_S)
     ),
-    # The constant's rule as it pools (every constant clock of the validation has three windows or
-    # more and a jackknife that saw a spread; `combined` in each grade says which rule applied).
-    "pooled, at least formal": lambda p, g: with_hidden(
+    "pooled, lever held": lambda p, g: with_hidden(
         p,
         max(
             math.sqrt((p["jackknife_s"] ** 2 + (p["windows_s"] or 0.0) ** 2) / 2),
+            p["formal_s"],
+            FLOOR_S,
+        ),
+    ),
+    # The constant's rule as it pools (every constant clock of the validation has three windows or
+    # more and a jackknife that saw a spread; `combined` in each grade says which rule applied):
+    # the windows' part with the share of σ the fitted lever adds, which the windows hold.
+    "pooled, the lever's share": lambda p, g: with_hidden(
+        p,
+        max(
+            math.sqrt(
+                (
+                    p["jackknife_s"] ** 2
+                    + (p["windows_s"] or 0.0) ** 2
+                    + p.get("lever_s", 0.0) ** 2
+                )
+                / 2
+            ),
             p["formal_s"],
             FLOOR_S,
         ),

@@ -20,7 +20,10 @@
 //!    from the mission's windows twice: the jackknife over the windows of that fit (D free; at
 //!    least its formal σ, see [`crate::align::pose_fit`]), and the profile's windows for the same
 //!    parameter (their calibrated σ combined and raised by their scatter about it, D held; the
-//!    signal searches' 2 ms floor is not theirs). An offset's σ (the constant's, each segment's) is
+//!    signal searches' 2 ms floor is not theirs). The windows hold D, so they cannot see what
+//!    D's freedom adds to the offset's error (a forward lever fitted a few centimetres off moves
+//!    every window alike); that share of the formal σ ([`pose_fit::PoseFit::lever_share_s`]) joins
+//!    their part in quadrature. An offset's σ (the constant's, each segment's) is
 //!    the mean of the two variances, at least the formal σ (over at least [`MIN_POOLED_WINDOWS`]
 //!    windows and where the jackknife saw a spread; otherwise the larger): each alone is an
 //!    estimate from 8–30 windows, noisy from mission to mission, and the larger of two noisy
@@ -137,7 +140,8 @@ pub const DEEP_SEARCH_SIGMA_S: f64 = 0.002;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SigmaCombination {
-    /// An offset (constant, a segment): the mean of the two variances, at least the formal σ.
+    /// An offset (constant, a segment): the mean of the two variances (the windows' with the
+    /// lever's share), at least the formal σ.
     Pooled,
     /// The larger of the fit's σ (the jackknife, at least the formal) and the windows': the line's
     /// rule, and an offset's over fewer than three windows, without windows, or where the jackknife
@@ -157,6 +161,11 @@ pub struct SigmaParts {
     /// and raised by their scatter about it); `None` without a window inside an offset's span, or
     /// fewer than two for the line.
     pub windows_s: Option<f64>,
+    /// The part of the fit's formal σ that the lever's freedom adds ([`PoseFit::lever_share_s`]),
+    /// which the windows, the lever held, cannot see: added to their part in quadrature before
+    /// pooling (0 when not pooled).
+    #[serde(default)]
+    pub lever_s: f64,
     /// A drift below the resolution the constant could hide, added in quadrature (0 otherwise).
     pub hidden_drift_s: f64,
     /// Half the distance to a fit along the forward lever's valley that the windows do not find
@@ -967,7 +976,8 @@ pub fn steps_resolved(fit: &PoseFit) -> bool {
 /// Step 4: `model`'s parameters and their σ from its fit `last` (σ at least
 /// [`POSE_SIGMA_FLOOR_S`]). An offset's σ (the constant's, each segment's) pools the fit's
 /// jackknife with what the profile's windows give for it (their calibrated σ combined and raised by
-/// their scatter): the mean of the two variances, at least the formal σ. The line's σ are the
+/// their scatter, with the share of σ the fitted lever adds, which they hold): the mean of the two
+/// variances, at least the formal σ. The line's σ are the
 /// fit's, at least the windows' (see the module doc). The constant's σ also adds a drift the
 /// profile measures beyond [`HIDDEN_DRIFT_Z`] of its σ, and `valley_s` (the lead search's: half
 /// the distance to a fit the windows cannot tell from it), both in quadrature; the piecewise
@@ -986,6 +996,7 @@ fn set_parameters(
         jackknife_s: last.theta_jackknife_sigma[k],
         formal_s: last.theta_formal_sigma[k],
         windows_s,
+        lever_s: 0.0,
         hidden_drift_s: 0.0,
         valley_s: 0.0,
         basins_s: 0.0,
@@ -997,11 +1008,17 @@ fn set_parameters(
         let jackknife = last.theta_jackknife_sigma[k];
         match windows_s {
             Some(w) if jackknife > 0.0 && windows_inside(profile, span) >= MIN_POOLED_WINDOWS => {
-                let s = ((jackknife * jackknife + w * w) / 2.0)
+                let lever_s = last.lever_share_s(k);
+                let windows_var = w * w + lever_s * lever_s;
+                let s = ((jackknife * jackknife + windows_var) / 2.0)
                     .sqrt()
                     .max(last.theta_formal_sigma[k])
                     .max(POSE_SIGMA_FLOOR_S);
-                (s, parts(k, windows_s, SigmaCombination::Pooled))
+                let parts = SigmaParts {
+                    lever_s,
+                    ..parts(k, windows_s, SigmaCombination::Pooled)
+                };
+                (s, parts)
             }
             _ => (
                 sigma(k, windows_s),
@@ -1226,7 +1243,7 @@ mod tests {
             theta_sigma: sigma,
             lever_sigma_m: None,
             covariance: DMatrix::zeros(n, n),
-            variance_inflation: 1.0,
+            variance_inflation: vec![1.0; n],
             windows: Vec::new(),
             outliers: Vec::new(),
             rms_m: Vec::new(),
@@ -1347,6 +1364,32 @@ mod tests {
         let windows_s = ms(1.0) * (16.0f64 / 3.0).sqrt();
         let expected = ((ms(0.3).powi(2) + windows_s * windows_s) / 2.0).sqrt();
         assert!(close(m.sigma_s, expected), "{m:?}");
+    }
+
+    #[test]
+    fn the_windows_part_carries_the_share_of_sigma_the_fitted_lever_adds() {
+        let p = profile(|_| 0.1);
+        let ms = |v: f64| v * 1e-3;
+        // A fit whose formal σ of 2 ms is four times the variance it would have with the lever
+        // held: the lever's freedom adds 2·√(1 − 1/4) = √3 ms, which the windows (1 ms, lever held)
+        // cannot see. Pooled with the jackknife's 3 ms: √((3² + 1² + 3)/2) = √6.5 ms.
+        let mut lever_free = fit(ClockShape::Constant, vec![0.1], vec![ms(3.0)]);
+        lever_free.theta_formal_sigma = vec![ms(2.0)];
+        lever_free.variance_inflation = vec![4.0];
+        assert!((lever_free.lever_share_s(0) - ms(3f64.sqrt())).abs() < 1e-12);
+        let mut m = ClockModel::constant(0.0, 0.0, String::new());
+        let parts = set_parameters(&mut m, &lever_free, &p, 0.0).unwrap();
+        assert!((m.sigma_s - ms(6.5f64.sqrt())).abs() < 1e-12, "{m:?}");
+        assert!((parts.lever_s - ms(3f64.sqrt())).abs() < 1e-12);
+        assert!(close(parts.windows_s.unwrap(), ms(1.0)));
+        // Without a lever (inflation 1) nothing is added: √((3² + 1²)/2) ms.
+        lever_free.variance_inflation = vec![1.0];
+        let mut m = ClockModel::constant(0.0, 0.0, String::new());
+        let parts = set_parameters(&mut m, &lever_free, &p, 0.0).unwrap();
+        assert!(
+            close(m.sigma_s, ms(5f64.sqrt())) && parts.lever_s == 0.0,
+            "{m:?}"
+        );
     }
 
     #[test]

@@ -258,8 +258,9 @@ pub struct PoseFit {
     pub lever_sigma_m: Option<Vector3<f64>>,
     /// The covariance of (θ, D): the jackknife's, each variance raised to at least the formal one.
     pub covariance: DMatrix<f64>,
-    /// Δt's error with the lever fitted over Δt's error with it held, squared (θ₀; 1 without lever).
-    pub variance_inflation: f64,
+    /// Each clock parameter's error with the lever fitted over its error with the lever held,
+    /// squared (from the normal equations; 1 without lever).
+    pub variance_inflation: Vec<f64>,
     /// The windows used, and the ones left out as outliers (their residual RMS).
     pub windows: Vec<Window>,
     pub outliers: Vec<Window>,
@@ -279,7 +280,19 @@ impl PoseFit {
     /// Whether Δt and the lever are too entangled to tell apart (constant speed, no turns in place):
     /// Δt's variance grows by more than [`INSEPARABLE_VIF`] when the lever is fitted.
     pub fn inseparable(&self) -> bool {
-        self.variance_inflation > INSEPARABLE_VIF
+        self.variance_inflation[0] > INSEPARABLE_VIF
+    }
+
+    /// The part of θₖ's formal σ that the lever's freedom adds, seconds: what a fit with the lever
+    /// held cannot see, √(formal² · (1 − 1/inflation)) (0 without a formal σ or a lever).
+    pub fn lever_share_s(&self, k: usize) -> f64 {
+        let formal = self.theta_formal_sigma[k];
+        let inflation = self.variance_inflation[k];
+        if inflation.is_finite() {
+            formal * (1.0 - 1.0 / inflation.max(1.0)).sqrt()
+        } else {
+            formal
+        }
     }
 }
 

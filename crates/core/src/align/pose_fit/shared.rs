@@ -440,8 +440,9 @@ impl SharedFit<'_> {
         scales: &DVector<f64>,
         before: f64,
     ) -> bool {
+        const TRIES: usize = 10;
         let (m, c) = (self.m, x.jacobian_scale);
-        for _ in 0..10 {
+        for tried in 1..=TRIES {
             let largest = (0..m).map(|k| step[k].abs()).fold(0.0, f64::max);
             let a = if largest > MAX_STEP_S {
                 MAX_STEP_S / largest
@@ -466,6 +467,9 @@ impl SharedFit<'_> {
                 return true;
             }
             x.damping.rejected();
+            if tried == TRIES {
+                break;
+            }
             match self.normal(&x.terms, &x.lever_m, l, c, x.damping.lambda) {
                 (Some(s), ..) => *step = s,
                 _ => return false,
@@ -804,12 +808,17 @@ impl SharedFit<'_> {
                 && (!with_lever || (m..p).all(|k| step[k].abs() <= sig(k).max(1e-3)))
         });
         let variance_inflation = if with_lever {
-            // Var(θ₀) with D free over Var(θ₀) with D held, from the normal equations.
-            h.clone()
-                .try_inverse()
-                .map_or(f64::INFINITY, |inv| inv[(0, 0)] * h[(0, 0)])
+            // Var(θₖ) with D free over Var(θₖ) with D held (the other θ free in both), from the
+            // normal equations: (H⁻¹)ₖₖ over ((H_θθ)⁻¹)ₖₖ.
+            let held = h.view((0, 0), (m, m)).clone_owned().try_inverse();
+            match (h.clone().try_inverse(), held) {
+                (Some(free), Some(held)) => (0..m)
+                    .map(|k| (free[(k, k)] / held[(k, k)]).max(1.0))
+                    .collect(),
+                _ => vec![f64::INFINITY; m],
+            }
         } else {
-            1.0
+            vec![1.0; m]
         };
         Some(PoseFit {
             shape: self.shape.clone(),
