@@ -23,7 +23,9 @@
 //!    signal searches' 2 ms floor is not theirs). The windows hold D, so they cannot see what
 //!    D's freedom adds to the offset's error (a forward lever fitted a few centimetres off moves
 //!    every window alike); that share of the formal σ ([`pose_fit::PoseFit::lever_share_s`]) joins
-//!    their part in quadrature. An offset's σ (the constant's, each segment's) is
+//!    their part in quadrature (on the second simulator's 960 seen missions, scaled to equal
+//!    medians, errors beyond 2.5σ 41 → 33; docs/evidence.md, "The lever's share of σ"). An
+//!    offset's σ (the constant's, each segment's) is
 //!    the mean of the two variances, at least the formal σ (over at least [`MIN_POOLED_WINDOWS`]
 //!    windows and where the jackknife saw a spread; otherwise the larger): each alone is an
 //!    estimate from 8–30 windows, noisy from mission to mission, and the larger of two noisy
