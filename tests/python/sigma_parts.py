@@ -32,6 +32,13 @@ def with_hidden(p, s):
     return math.hypot(s, p["hidden_drift_s"], p.get("valley_s", 0.0), p.get("basins_s", 0.0))
 
 
+def pooled(p, lever_s):
+    """The mean of the jackknife's and the windows' variances (the windows' with `lever_s` in
+    quadrature), at least the formal σ."""
+    windows_var = (p["windows_s"] or 0.0) ** 2 + lever_s**2
+    return max(math.sqrt((p["jackknife_s"] ** 2 + windows_var) / 2), p["formal_s"], FLOOR_S)
+
+
 RULES = {
     "reported": lambda p, g: g["sigma_s"],
     "jackknife alone": lambda p, g: max(p["jackknife_s"], FLOOR_S),
@@ -43,32 +50,11 @@ RULES = {
     "larger of the three": lambda p, g: with_hidden(
         p, max(p["jackknife_s"], p["formal_s"], p["windows_s"] or 0.0, FLOOR_S)
     ),
-    "pooled, lever held": lambda p, g: with_hidden(
-        p,
-        max(
-            math.sqrt((p["jackknife_s"] ** 2 + (p["windows_s"] or 0.0) ** 2) / 2),
-            p["formal_s"],
-            FLOOR_S,
-        ),
-    ),
+    "pooled, lever held": lambda p, g: with_hidden(p, pooled(p, 0.0)),
     # The constant's rule as it pools (every constant clock of the validation has three windows or
     # more and a jackknife that saw a spread; `combined` in each grade says which rule applied):
     # the windows' part with the share of σ the fitted lever adds, which the windows hold.
-    "pooled, the lever's share": lambda p, g: with_hidden(
-        p,
-        max(
-            math.sqrt(
-                (
-                    p["jackknife_s"] ** 2
-                    + (p["windows_s"] or 0.0) ** 2
-                    + p.get("lever_s", 0.0) ** 2
-                )
-                / 2
-            ),
-            p["formal_s"],
-            FLOOR_S,
-        ),
-    ),
+    "pooled, the lever's share": lambda p, g: with_hidden(p, pooled(p, p.get("lever_s", 0.0))),
 }
 
 

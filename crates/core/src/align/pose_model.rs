@@ -1378,11 +1378,11 @@ mod tests {
         let mut lever_free = fit(ClockShape::Constant, vec![0.1], vec![ms(3.0)]);
         lever_free.theta_formal_sigma = vec![ms(2.0)];
         lever_free.variance_inflation = vec![4.0];
-        assert!((lever_free.lever_share_s(0) - ms(3f64.sqrt())).abs() < 1e-12);
+        assert!(close(lever_free.lever_share_s(0), ms(3f64.sqrt())));
         let mut m = ClockModel::constant(0.0, 0.0, String::new());
         let parts = set_parameters(&mut m, &lever_free, &p, 0.0).unwrap();
-        assert!((m.sigma_s - ms(6.5f64.sqrt())).abs() < 1e-12, "{m:?}");
-        assert!((parts.lever_s - ms(3f64.sqrt())).abs() < 1e-12);
+        assert!(close(m.sigma_s, ms(6.5f64.sqrt())), "{m:?}");
+        assert!(close(parts.lever_s, ms(3f64.sqrt())));
         assert!(close(parts.windows_s.unwrap(), ms(1.0)));
         // Without a lever (inflation 1) nothing is added: √((3² + 1²)/2) ms.
         lever_free.variance_inflation = vec![1.0];

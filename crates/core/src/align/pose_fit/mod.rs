@@ -284,15 +284,11 @@ impl PoseFit {
     }
 
     /// The part of θₖ's formal σ that the lever's freedom adds, seconds: what a fit with the lever
-    /// held cannot see, √(formal² · (1 − 1/inflation)) (0 without a formal σ or a lever).
+    /// held cannot see, √(formal² · (1 − 1/inflation)) (0 without a formal σ or a lever; all of
+    /// it where the inflation is infinite).
     pub fn lever_share_s(&self, k: usize) -> f64 {
-        let formal = self.theta_formal_sigma[k];
-        let inflation = self.variance_inflation[k];
-        if inflation.is_finite() {
-            formal * (1.0 - 1.0 / inflation.max(1.0)).sqrt()
-        } else {
-            formal
-        }
+        let kept = 1.0 / self.variance_inflation[k];
+        self.theta_formal_sigma[k] * (1.0 - kept).max(0.0).sqrt()
     }
 }
 
