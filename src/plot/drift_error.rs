@@ -6,7 +6,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::style::{
-    decimate, label_font, padded_range, plot_err, series_color, xy_chart, Draw, MAX_POINTS,
+    decimate, legend, padded_range, plot_err, series_color, xy_chart, Draw, MAX_POINTS,
 };
 use crate::error::Result;
 
@@ -80,13 +80,6 @@ impl Draw for DriftAlong {
                     PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
                 });
         }
-        chart
-            .configure_series_labels()
-            .label_font(label_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(plot_err)
+        legend(&mut chart, SeriesLabelPosition::UpperRight)
     }
 }

@@ -343,14 +343,7 @@ impl TrajectoryMap {
                     PathElement::new(vec![(x, y), (x + 20, y)], viridis(0.5).stroke_width(3))
                 });
         }
-        chart
-            .configure_series_labels()
-            .label_font(label_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()
-            .map_err(plot_err)
+        legend(&mut chart, SeriesLabelPosition::UpperLeft)
     }
 
     /// The titled 3-D chart with its axes drawn: one scale on all axes (a cube around every position,
@@ -489,14 +482,7 @@ impl Draw for StatsBars {
                 .label(label.clone())
                 .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 20, y + 5)], c.filled()));
         }
-        chart
-            .configure_series_labels()
-            .label_font(label_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()
-            .map_err(plot_err)
+        legend(&mut chart, SeriesLabelPosition::LowerRight)
     }
 }
 
@@ -798,14 +784,7 @@ impl Draw for XyzOverTime {
                 }
             }
             if k == 0 {
-                chart
-                    .configure_series_labels()
-                    .label_font(label_font())
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK)
-                    .position(SeriesLabelPosition::UpperRight)
-                    .draw()
-                    .map_err(plot_err)?;
+                legend(&mut chart, SeriesLabelPosition::UpperRight)?;
             }
         }
         Ok(())

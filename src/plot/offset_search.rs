@@ -5,7 +5,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::offset_curves::CorrelationCurve;
-use super::style::{label_font, padded_range, plot_err, series_color, title_font, Draw};
+use super::style::{label_font, legend, padded_range, plot_err, series_color, title_font, Draw};
 use crate::error::Result;
 
 /// The data of the figure.
@@ -75,13 +75,6 @@ impl Draw for OffsetSearch {
                     PathElement::new(vec![(x, y), (x + 20, y)], red.stroke_width(2))
                 });
         }
-        chart
-            .configure_series_labels()
-            .label_font(label_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()
-            .map_err(plot_err)
+        legend(&mut chart, SeriesLabelPosition::LowerRight)
     }
 }

@@ -153,9 +153,9 @@ pub fn xy_chart<'a, DB: DrawingBackend>(
     Ok(chart)
 }
 
-/// The legend box of `chart` at `pos`.
-pub fn legend<'a, DB: DrawingBackend + 'a>(
-    chart: &mut Chart<'a, DB>,
+/// The legend box of `chart` at `pos`, on a 2-D chart or a 3-D one alike.
+pub fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
     pos: SeriesLabelPosition,
 ) -> Result<()> {
     chart

@@ -7,7 +7,7 @@ use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::style::{label_font, padded_range, plot_err, series_color, title_font, Draw};
+use super::style::{label_font, legend, padded_range, plot_err, series_color, title_font, Draw};
 use crate::error::Result;
 use crate::eval::sweep::Sweep;
 
@@ -123,14 +123,7 @@ impl Draw for SweepFigure {
                 .legend(move |(x, y)| Circle::new((x + 10, y), 2, c.filled()));
         }
         self.draw_markers(&mut chart, y1)?;
-        chart
-            .configure_series_labels()
-            .label_font(label_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()
-            .map_err(plot_err)
+        legend(&mut chart, SeriesLabelPosition::LowerRight)
     }
 }
 
