@@ -37,6 +37,65 @@ pub struct EvoUsability {
     pub config: Option<PathBuf>,
 }
 
+/// evo's Rerun viewer flags: accepted, named once on stderr (there is no viewer here; `-p`
+/// writes the figures as files).
+#[derive(Debug, Clone, Default, Args)]
+pub struct EvoViewer {
+    /// evo: log to a Rerun viewer (no viewer here; named on stderr).
+    #[arg(long = "rerun")]
+    pub rerun: bool,
+    /// evo: the Rerun recording id (named on stderr).
+    #[arg(long = "rerun_rec_id", value_name = "ID")]
+    pub rerun_rec_id: Option<String>,
+}
+
+impl EvoViewer {
+    /// The flags given, for [`ignored_notes`].
+    pub fn given(&self) -> [(&'static str, bool, &'static str); 2] {
+        [
+            (
+                "--rerun",
+                self.rerun,
+                "there is no Rerun viewer; -p writes the figures as files",
+            ),
+            (
+                "--rerun_rec_id",
+                self.rerun_rec_id.is_some(),
+                "there is no Rerun viewer",
+            ),
+        ]
+    }
+}
+
+/// evo's map layers under the trajectory figures: accepted, named once on stderr (not drawn here).
+#[derive(Debug, Clone, Default, Args)]
+pub struct EvoMapLayers {
+    /// evo: a ROS map image under the trajectories (not drawn here; named on stderr).
+    #[arg(long = "ros_map_yaml", value_name = "FILE")]
+    pub ros_map_yaml: Option<String>,
+    /// evo: a map tile layer (not drawn here; named on stderr).
+    #[arg(long = "map_tile", value_name = "CRS")]
+    pub map_tile: Option<String>,
+}
+
+impl EvoMapLayers {
+    /// The flags given, for [`ignored_notes`].
+    pub fn given(&self) -> [(&'static str, bool, &'static str); 2] {
+        [
+            (
+                "--ros_map_yaml",
+                self.ros_map_yaml.is_some(),
+                "ROS map images are not drawn",
+            ),
+            (
+                "--map_tile",
+                self.map_tile.is_some(),
+                "map tiles are not drawn (no network)",
+            ),
+        ]
+    }
+}
+
 /// `evo_ape`/`evo_rpe`'s flags beyond the metric: figures, result file, filters, usability.
 #[derive(Debug, Clone, Default, Args)]
 #[command(allow_negative_numbers = true)]
@@ -71,21 +130,13 @@ pub struct EvoMetricArgs {
     /// Draw the whole reference, not only its poses associated with the estimate.
     #[arg(long = "plot_full_ref")]
     pub plot_full_ref: bool,
-    /// evo: a ROS map image under the trajectories (not drawn here; named on stderr).
-    #[arg(long = "ros_map_yaml", value_name = "FILE")]
-    pub ros_map_yaml: Option<String>,
-    /// evo: a map tile layer (not drawn here; named on stderr).
-    #[arg(long = "map_tile", value_name = "CRS")]
-    pub map_tile: Option<String>,
+    #[command(flatten)]
+    pub map_layers: EvoMapLayers,
     /// Write the figures to FILE_raw.EXT, FILE_map.EXT, FILE_stats.EXT (EXT svg or png).
     #[arg(long = "save_plot", value_name = "FILE")]
     pub save_plot: Option<PathBuf>,
-    /// evo: log to a Rerun viewer (no viewer here; named on stderr).
-    #[arg(long = "rerun")]
-    pub rerun: bool,
-    /// evo: the Rerun recording id (named on stderr).
-    #[arg(long = "rerun_rec_id", value_name = "ID")]
-    pub rerun_rec_id: Option<String>,
+    #[command(flatten)]
+    pub viewer: EvoViewer,
     /// Write evo's result file (zip: info.json, stats.json, .npy arrays) that evo_res and
     /// `trajdrift res` read.
     #[arg(long = "save_results", value_name = "FILE.zip")]
@@ -135,12 +186,8 @@ pub struct ResArgs {
     /// Write the statistics table: .csv (evo's default), .json or .md.
     #[arg(long = "save_table", value_name = "FILE")]
     pub save_table: Option<PathBuf>,
-    /// evo: log to a Rerun viewer (named on stderr).
-    #[arg(long = "rerun")]
-    pub rerun: bool,
-    /// evo: the Rerun recording id (named on stderr).
-    #[arg(long = "rerun_rec_id", value_name = "ID")]
-    pub rerun_rec_id: Option<String>,
+    #[command(flatten)]
+    pub viewer: EvoViewer,
     /// Each statistic's mean ± 95 % interval over repeated runs: results grouped by estimator (the
     /// file name less a trailing run number, `orb_03.zip` → `orb`) and mission (the reference's name).
     #[arg(long = "runs")]
@@ -238,21 +285,13 @@ pub struct TrajArgs {
     /// The axes of the trajectory figure.
     #[arg(long = "plot_mode", value_name = "MODE", default_value = "xyz", value_parser = PLOT_MODES)]
     pub plot_mode: String,
-    /// evo: a ROS map image (named on stderr).
-    #[arg(long = "ros_map_yaml", value_name = "FILE")]
-    pub ros_map_yaml: Option<String>,
-    /// evo: a map tile layer (named on stderr).
-    #[arg(long = "map_tile", value_name = "CRS")]
-    pub map_tile: Option<String>,
+    #[command(flatten)]
+    pub map_layers: EvoMapLayers,
     /// Write the figures to FILE_trajectories.EXT and FILE_xyz.EXT (EXT svg or png).
     #[arg(long = "save_plot", value_name = "FILE")]
     pub save_plot: Option<PathBuf>,
-    /// evo: log to a Rerun viewer (named on stderr).
-    #[arg(long = "rerun")]
-    pub rerun: bool,
-    /// evo: the Rerun recording id (named on stderr).
-    #[arg(long = "rerun_rec_id", value_name = "ID")]
-    pub rerun_rec_id: Option<String>,
+    #[command(flatten)]
+    pub viewer: EvoViewer,
     /// Write the information table as CSV.
     #[arg(long = "save_table", value_name = "FILE")]
     pub save_table: Option<PathBuf>,

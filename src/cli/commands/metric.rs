@@ -320,28 +320,7 @@ fn load_pair(
 
 /// Names once on stderr the evo flags that have no meaning here (accepted, never a usage error).
 fn note_ignored(log: &EvoLog, evo: &EvoMetricArgs) {
-    for note in ignored_notes(&[
-        (
-            "--rerun",
-            evo.rerun,
-            "there is no Rerun viewer; -p writes the figures as files",
-        ),
-        (
-            "--rerun_rec_id",
-            evo.rerun_rec_id.is_some(),
-            "there is no Rerun viewer",
-        ),
-        (
-            "--ros_map_yaml",
-            evo.ros_map_yaml.is_some(),
-            "ROS map images are not drawn",
-        ),
-        (
-            "--map_tile",
-            evo.map_tile.is_some(),
-            "map tiles are not drawn (no network)",
-        ),
-    ]) {
+    for note in ignored_notes(&[evo.viewer.given(), evo.map_layers.given()].concat()) {
         log.warn(&note);
     }
 }

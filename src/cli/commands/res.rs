@@ -16,18 +16,7 @@ use crate::cli::{EXIT_OK, EXIT_WARNING};
 /// Runs the command; returns the exit code.
 pub fn run(a: ResArgs) -> Result<u8> {
     let log = EvoLog::new(&a.usability, &a);
-    for note in ignored_notes(&[
-        (
-            "--rerun",
-            a.rerun,
-            "there is no Rerun viewer; -p writes the figures as files",
-        ),
-        (
-            "--rerun_rec_id",
-            a.rerun_rec_id.is_some(),
-            "there is no Rerun viewer",
-        ),
-    ]) {
+    for note in ignored_notes(&a.viewer.given()) {
         log.warn(&note);
     }
     if a.result_files.is_empty() {

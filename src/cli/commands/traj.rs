@@ -160,33 +160,13 @@ pub fn run(a: TrajArgs) -> Result<u8> {
 
 /// Warns of each evo flag given that has no effect here (viewers, map layers, topic discovery).
 fn warn_ignored(a: &TrajArgs, log: &EvoLog) {
-    for note in ignored_notes(&[
-        (
-            "--rerun",
-            a.rerun,
-            "there is no Rerun viewer; -p writes the figures as files",
-        ),
-        (
-            "--rerun_rec_id",
-            a.rerun_rec_id.is_some(),
-            "there is no Rerun viewer",
-        ),
-        (
-            "--ros_map_yaml",
-            a.ros_map_yaml.is_some(),
-            "ROS map images are not drawn",
-        ),
-        (
-            "--map_tile",
-            a.map_tile.is_some(),
-            "map tiles are not drawn (no network)",
-        ),
-        (
-            "--all_topics",
-            a.all_topics,
-            "name the topics; `trajdrift topics RECORDING` lists them",
-        ),
-    ]) {
+    let all_topics = [(
+        "--all_topics",
+        a.all_topics,
+        "name the topics; `trajdrift topics RECORDING` lists them",
+    )];
+    for note in ignored_notes(&[&a.viewer.given()[..], &a.map_layers.given(), &all_topics].concat())
+    {
         log.warn(&note);
     }
 }
