@@ -260,11 +260,27 @@ impl TrajectoryMap {
                     PathElement::new(vec![(x, y), (x + 20, y)], grey.stroke_width(2))
                 });
         }
+        self.draw_estimates(&mut chart, flat)?;
+        legend(&mut chart, SeriesLabelPosition::UpperLeft)
+    }
+
+    /// The trajectories, each a line of its own colour, and the coloured estimate's segments, on a
+    /// 2-D or 3-D chart: `at` places a position in the chart's coordinates.
+    fn draw_estimates<DB, CT, P>(
+        &self,
+        chart: &mut ChartContext<'_, DB, CT>,
+        at: impl Fn(&[f64; 3]) -> P + Copy,
+    ) -> Result<()>
+    where
+        DB: DrawingBackend,
+        CT: CoordTranslate<From = P>,
+        P: Clone + 'static,
+    {
         let n = self.trajectories.len();
         for (i, (name, t)) in self.trajectories.iter().enumerate() {
             let c = series_color(i, n);
             chart
-                .draw_series(LineSeries::new(thin(t).iter().map(flat), c.stroke_width(2)))
+                .draw_series(LineSeries::new(thin(t).iter().map(at), c.stroke_width(2)))
                 .map_err(plot_err)?
                 .label(name.clone())
                 .legend(move |(x, y)| {
@@ -273,12 +289,12 @@ impl TrajectoryMap {
         }
         if let Some(c) = &self.coloured {
             let ids = decimate(c.positions.len(), MAX_POINTS);
-            let segs: Vec<PathElement<(f64, f64)>> = ids
+            let segs: Vec<PathElement<P>> = ids
                 .windows(2)
                 .map(|w| {
                     let col = self.colour(c.values[w[1]]);
                     PathElement::new(
-                        vec![flat(&c.positions[w[0]]), flat(&c.positions[w[1]])],
+                        vec![at(&c.positions[w[0]]), at(&c.positions[w[1]])],
                         col.stroke_width(3),
                     )
                 })
@@ -291,7 +307,7 @@ impl TrajectoryMap {
                     PathElement::new(vec![(x, y), (x + 20, y)], viridis(0.5).stroke_width(3))
                 });
         }
-        legend(&mut chart, SeriesLabelPosition::UpperLeft)
+        Ok(())
     }
 
     /// The 3-D view: the reference, the trajectories and the coloured estimate in the cube of
@@ -312,37 +328,7 @@ impl TrajectoryMap {
                     PathElement::new(vec![(x, y), (x + 20, y)], grey.stroke_width(2))
                 });
         }
-        let n = self.trajectories.len();
-        for (i, (name, t)) in self.trajectories.iter().enumerate() {
-            let c = series_color(i, n);
-            chart
-                .draw_series(LineSeries::new(thin(t).iter().map(up), c.stroke_width(2)))
-                .map_err(plot_err)?
-                .label(name.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                });
-        }
-        if let Some(c) = &self.coloured {
-            let ids = decimate(c.positions.len(), MAX_POINTS);
-            let segs: Vec<PathElement<(f64, f64, f64)>> = ids
-                .windows(2)
-                .map(|w| {
-                    let col = self.colour(c.values[w[1]]);
-                    PathElement::new(
-                        vec![up(&c.positions[w[0]]), up(&c.positions[w[1]])],
-                        col.stroke_width(3),
-                    )
-                })
-                .collect();
-            chart
-                .draw_series(segs)
-                .map_err(plot_err)?
-                .label(c.name.clone())
-                .legend(|(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], viridis(0.5).stroke_width(3))
-                });
-        }
+        self.draw_estimates(&mut chart, up)?;
         legend(&mut chart, SeriesLabelPosition::UpperLeft)
     }
 
