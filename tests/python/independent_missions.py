@@ -214,6 +214,15 @@ def mission(kind, seed, without=()):
     return (epoch + stamps_ref[order_ref], ref[order_ref]), (epoch + stamps_est[order_est], est[order_est], q_est[order_est]), info
 
 
+def mission_seeds(seed_sets, missions, kinds=KINDS):
+    """(kind, seed) of every mission drawn: mission k of a kind in seed set S has the seed
+    1000·S + 100·(the kind's index in KINDS) + k."""
+    for first in seed_sets:
+        for kind in kinds:
+            for k in range(missions):
+                yield kind, first * 1000 + KINDS.index(kind) * 100 + k
+
+
 def write_tum(path, stamps, pos, quat=None):
     if quat is None:
         quat = np.tile([0.0, 0.0, 0.0, 1.0], (len(stamps), 1))
@@ -264,46 +273,43 @@ def main():
     args = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as workdir:
-        for first in args.seed:
-            for kind in KINDS:
-                for k in range(args.missions):
-                    seed = first * 1000 + KINDS.index(kind) * 100 + k
-                    ref, est, info = mission(kind, seed, args.without)
-                    if args.only and info["legged"] != (args.only == "walking"):
-                        continue
-                    if args.keep:
-                        os.makedirs(args.keep, exist_ok=True)
-                        write_tum(os.path.join(args.keep, f"{kind}{seed}_ref.tum"), *ref)
-                        write_tum(os.path.join(args.keep, f"{kind}{seed}_est.tum"), *est)
-                        with open(os.path.join(args.keep, f"{kind}{seed}_truth.json"), "w") as f:
-                            json.dump(info, f, indent=1)
-                    o, codes = evaluate(args.trajdrift, ref, est, workdir)
-                    if o is None:
-                        print(f"{kind:9} {seed:6} FAILED {codes}")
-                        rows.append(dict(info, kind=kind, error_s=None))
-                        continue
-                    err = o["offset_s"] - info["truth_s"]
-                    sigma = o.get("sigma_s")
-                    alarm = any(c in ("clock_drift_suspected", "clock_step_suspected") for c in codes)
-                    rows.append(
-                        dict(
-                            info,
-                            kind=kind,
-                            error_s=err,
-                            sigma_s=sigma,
-                            formal_s=(o.get("sigma_parts") or {}).get("formal_s"),
-                            model=o.get("model"),
-                            method=o.get("method"),
-                            alarm=alarm,
-                        )
-                    )
-                    print(
-                        f"{kind:9} {seed:6} {'legged' if info['legged'] else 'ground':6} ref {info['ref_hz']:4.0f} Hz est {info['est_hz']:4.0f} Hz "
-                        f"noise {info['noise_mm']:4.1f} mm  error {1e3 * err:+7.2f} ms  σ {1e3 * (sigma or float('nan')):6.2f} ms  "
-                        f"lead {1e3 * info['lead_s']:+5.0f} ms  "
-                        f"{o.get('method')} {o.get('model')}{'  ALARM' if alarm else ''}",
-                        flush=True,
-                    )
+        for kind, seed in mission_seeds(args.seed, args.missions):
+            ref, est, info = mission(kind, seed, args.without)
+            if args.only and info["legged"] != (args.only == "walking"):
+                continue
+            if args.keep:
+                os.makedirs(args.keep, exist_ok=True)
+                write_tum(os.path.join(args.keep, f"{kind}{seed}_ref.tum"), *ref)
+                write_tum(os.path.join(args.keep, f"{kind}{seed}_est.tum"), *est)
+                with open(os.path.join(args.keep, f"{kind}{seed}_truth.json"), "w") as f:
+                    json.dump(info, f, indent=1)
+            o, codes = evaluate(args.trajdrift, ref, est, workdir)
+            if o is None:
+                print(f"{kind:9} {seed:6} FAILED {codes}")
+                rows.append(dict(info, kind=kind, error_s=None))
+                continue
+            err = o["offset_s"] - info["truth_s"]
+            sigma = o.get("sigma_s")
+            alarm = any(c in ("clock_drift_suspected", "clock_step_suspected") for c in codes)
+            rows.append(
+                dict(
+                    info,
+                    kind=kind,
+                    error_s=err,
+                    sigma_s=sigma,
+                    formal_s=(o.get("sigma_parts") or {}).get("formal_s"),
+                    model=o.get("model"),
+                    method=o.get("method"),
+                    alarm=alarm,
+                )
+            )
+            print(
+                f"{kind:9} {seed:6} {'legged' if info['legged'] else 'ground':6} ref {info['ref_hz']:4.0f} Hz est {info['est_hz']:4.0f} Hz "
+                f"noise {info['noise_mm']:4.1f} mm  error {1e3 * err:+7.2f} ms  σ {1e3 * (sigma or float('nan')):6.2f} ms  "
+                f"lead {1e3 * info['lead_s']:+5.0f} ms  "
+                f"{o.get('method')} {o.get('model')}{'  ALARM' if alarm else ''}",
+                flush=True,
+            )
     ok = [r for r in rows if r.get("error_s") is not None and r.get("sigma_s")]
     e = [abs(r["error_s"]) * 1e3 for r in ok]
     z = [abs(r["error_s"]) / r["sigma_s"] for r in ok]

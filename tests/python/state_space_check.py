@@ -178,31 +178,28 @@ def main():
     args = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as workdir:
-        for first in args.seed:
-            for kind in KINDS:
-                for k in range(args.missions):
-                    seed = first * 1000 + im.KINDS.index(kind) * 100 + k
-                    ref, est, info = im.mission(kind, seed)
-                    if info["legged"]:
-                        continue
-                    o, _ = im.evaluate(args.trajdrift, ref, est, workdir)
-                    if o is None or not o.get("sigma_s"):
-                        continue
-                    best, sigma = fit(ref, est, info, o["offset_s"])
-                    if best is None:
-                        continue
-                    row = dict(
-                        kind=kind,
-                        seed=seed,
-                        ref_hz=info["ref_hz"],
-                        noise_mm=round(info["noise_mm"], 1),
-                        trajdrift_error_ms=round(1e3 * (o["offset_s"] - info["truth_s"]), 2),
-                        trajdrift_sigma_ms=round(1e3 * o["sigma_s"], 2),
-                        state_space_error_ms=round(1e3 * (best - info["truth_s"]), 2),
-                        state_space_sigma_ms=round(1e3 * sigma, 2),
-                    )
-                    rows.append(row)
-                    print(json.dumps(row), flush=True)
+        for kind, seed in im.mission_seeds(args.seed, args.missions, KINDS):
+            ref, est, info = im.mission(kind, seed)
+            if info["legged"]:
+                continue
+            o, _ = im.evaluate(args.trajdrift, ref, est, workdir)
+            if o is None or not o.get("sigma_s"):
+                continue
+            best, sigma = fit(ref, est, info, o["offset_s"])
+            if best is None:
+                continue
+            row = dict(
+                kind=kind,
+                seed=seed,
+                ref_hz=info["ref_hz"],
+                noise_mm=round(info["noise_mm"], 1),
+                trajdrift_error_ms=round(1e3 * (o["offset_s"] - info["truth_s"]), 2),
+                trajdrift_sigma_ms=round(1e3 * o["sigma_s"], 2),
+                state_space_error_ms=round(1e3 * (best - info["truth_s"]), 2),
+                state_space_sigma_ms=round(1e3 * sigma, 2),
+            )
+            rows.append(row)
+            print(json.dumps(row), flush=True)
     print()
     print(summary(f"trajdrift eval, {len(rows)} vehicles", [r["trajdrift_error_ms"] for r in rows], [r["trajdrift_sigma_ms"] for r in rows]))
     print(summary("whole-mission state space", [r["state_space_error_ms"] for r in rows], [r["state_space_sigma_ms"] for r in rows]))
