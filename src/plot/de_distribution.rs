@@ -4,7 +4,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::style::{label_font, padded_range, plot_err, series_color, title_font, Draw};
+use super::style::{category_chart, padded_range, plot_err, series_color, Draw};
 use crate::error::Result;
 
 /// The data: (label, each mission's DE RMSE).
@@ -24,31 +24,14 @@ impl Draw for DeDistribution {
                 .chain([0.0]),
         );
         let labels: Vec<String> = self.groups.iter().map(|g| g.0.clone()).collect();
-        let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, title_font())
-            .margin(10)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d(-0.5..(n as f64 - 0.5), 0.0..y1)
-            .map_err(plot_err)?;
-        chart
-            .configure_mesh()
-            .x_labels(n)
-            .x_label_formatter(&|x| {
-                let i = x.round();
-                if (x - i).abs() < 1e-6 && i >= 0.0 {
-                    labels.get(i as usize).cloned().unwrap_or_default()
-                } else {
-                    String::new()
-                }
-            })
-            .x_desc("estimate, window size")
-            .y_desc("DE RMSE per mission (–)")
-            .label_style(label_font())
-            .axis_desc_style(label_font())
-            .disable_x_mesh()
-            .draw()
-            .map_err(plot_err)?;
+        let mut chart = category_chart(
+            root,
+            &self.title,
+            &labels,
+            (0.0, y1),
+            ("estimate, window size", "DE RMSE per mission (–)"),
+            70,
+        )?;
         for (i, (_, v)) in self.groups.iter().enumerate() {
             let c = series_color(i, n);
             let x = i as f64;

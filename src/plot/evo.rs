@@ -12,8 +12,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::style::{
-    decimate, label_font, legend, padded_range, plot_err, series_color, title_font, viridis,
-    xy_chart, Draw, FAMILY, MAX_POINTS,
+    category_chart, decimate, label_font, legend, padded_range, plot_err, series_color, title_font,
+    viridis, xy_chart, Draw, FAMILY, MAX_POINTS,
 };
 use crate::error::{Error, Result};
 use crate::stats::quantile_sorted;
@@ -535,31 +535,14 @@ impl Draw for Distributions {
         let n = self.results.len().max(1);
         let (lo, hi) = padded_range(self.results.iter().flat_map(|r| r.1.iter().copied()));
         let labels: Vec<String> = self.results.iter().map(|r| r.0.clone()).collect();
-        let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, title_font())
-            .margin(10)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d(-0.5..(n as f64 - 0.5), lo..hi)
-            .map_err(plot_err)?;
-        chart
-            .configure_mesh()
-            .x_labels(n)
-            .x_label_formatter(&|x| {
-                let i = x.round();
-                if (x - i).abs() < 1e-6 && i >= 0.0 {
-                    labels.get(i as usize).cloned().unwrap_or_default()
-                } else {
-                    String::new()
-                }
-            })
-            .x_desc("estimate")
-            .y_desc(self.value_label.as_str())
-            .label_style(label_font())
-            .axis_desc_style(label_font())
-            .disable_x_mesh()
-            .draw()
-            .map_err(plot_err)?;
+        let mut chart = category_chart(
+            root,
+            &self.title,
+            &labels,
+            (lo, hi),
+            ("estimate", self.value_label.as_str()),
+            80,
+        )?;
         for (k, (_, values)) in self.results.iter().enumerate() {
             let mut s: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
             if s.is_empty() {

@@ -153,6 +153,45 @@ pub fn xy_chart<'a, DB: DrawingBackend>(
     Ok(chart)
 }
 
+/// A titled chart with one category per label along x (at 0, 1, …, named by `labels`) over `y`, the
+/// frame of box and violin plots; `y_label_area` is the width left for the y ticks, in pixels.
+pub fn category_chart<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    labels: &[String],
+    y: (f64, f64),
+    (x_desc, y_desc): (&str, &str),
+    y_label_area: u32,
+) -> Result<Chart<'a, DB>> {
+    let n = labels.len().max(1);
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, title_font())
+        .margin(10)
+        .x_label_area_size(50)
+        .y_label_area_size(y_label_area)
+        .build_cartesian_2d(-0.5..(n as f64 - 0.5), y.0..y.1)
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .x_labels(n)
+        .x_label_formatter(&|x| {
+            let i = x.round();
+            if (x - i).abs() < 1e-6 && i >= 0.0 {
+                labels.get(i as usize).cloned().unwrap_or_default()
+            } else {
+                String::new()
+            }
+        })
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .label_style(label_font())
+        .axis_desc_style(label_font())
+        .disable_x_mesh()
+        .draw()
+        .map_err(plot_err)?;
+    Ok(chart)
+}
+
 /// The legend box of `chart` at `pos`, on a 2-D chart or a 3-D one alike.
 pub fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
     chart: &mut ChartContext<'a, DB, CT>,
