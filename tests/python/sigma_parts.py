@@ -9,7 +9,7 @@ of σ":
     python3 tests/python/sigma_parts.py g1.json g1000.json g2000.json g3000.json
 
 Each grade carries the report's `sigma_parts` (the final fit's jackknife and formal σ, the profile
-windows' σ for the same parameter, the lever's share, the hidden drift) beside the error against the truth. For the
+windows' σ for the same parameter, the lever's share, the cuts' part, the hidden drift) beside the error against the truth. For the
 constant clocks and for the declared drifts it prints, per rule, the median |error|/σ, the share
 2σ covers, and how many errors lie beyond 2.5σ once σ is scaled to a Gaussian's median (how well
 the rule tells the missions apart, whatever its overall size); then how often 30 constant clocks
@@ -39,6 +39,11 @@ def pooled(p, lever_s):
     return max(math.sqrt((p["jackknife_s"] ** 2 + windows_var) / 2), p["formal_s"], FLOOR_S)
 
 
+def less_cuts(p, s):
+    cuts = p.get("cuts_s", 0.0)
+    return min(s, max(math.sqrt(max(s * s - cuts * cuts, 0.0)), p["formal_s"], FLOOR_S))
+
+
 RULES = {
     "reported": lambda p, g: g["sigma_s"],
     "jackknife alone": lambda p, g: max(p["jackknife_s"], FLOOR_S),
@@ -55,6 +60,11 @@ RULES = {
     # more and a jackknife that saw a spread; `combined` in each grade says which rule applied):
     # the windows' part with the share of σ the fitted lever adds, which the windows hold.
     "pooled, the lever's share": lambda p, g: with_hidden(p, pooled(p, p.get("lever_s", 0.0))),
+    # The constant's Δt is the mean over tilings of the windows: what the cuts chose (their spread)
+    # taken away in quadrature, at least the formal σ.
+    "the lever's share, less the cuts": lambda p, g: with_hidden(
+        p, less_cuts(p, pooled(p, p.get("lever_s", 0.0)))
+    ),
 }
 
 

@@ -36,6 +36,12 @@
 //!    there the windows' line is the narrower (alone its median |error|/σ is 1.02), and pooling
 //!    would take the declared drifts' 2σ coverage from 95 % to 93 %. The report's
 //!    `time_offset.sigma_parts` gives the pieces and the rule ([`SigmaParts`]).
+//! 5. **Tilings.** A constant's Δt and lever are the mean of the final fit and of three more on
+//!    the same windows' cuts moved by a quarter, a half and three quarters of a window
+//!    ([`TILINGS`], `over_tilings`): where the cuts fall chooses part of each window's slow errors,
+//!    and on 1–2 Hz references that part moved Δt by 10–30 ms from one tiling to the next. The
+//!    offset's σ loses, in quadrature, what the mean removes of the tilings' spread, at least the
+//!    formal σ (`sigma_parts.cuts_s`; docs/evidence.md, "The windows' cuts, averaged").
 //!
 //! **The lead search.** The signal searches read a sensor ahead of the other as a clock offset of
 //! lever/speed (at a walk, a 0.3 m lever is a second), and the fit from there stays in the long
@@ -137,6 +143,12 @@ pub const STEP_RESOLUTION_Z: f64 = 3.0;
 /// Every profile window is searched for a deeper root unless the whole mission's constant has a σ
 /// within this, seconds (see `Mission::window_search`).
 pub const DEEP_SEARCH_SIGMA_S: f64 = 0.002;
+/// A constant clock's Δt and lever are the mean over this many tilings of the mission's windows,
+/// each shifted by a further 1/`TILINGS` of a window (see `over_tilings` and the module doc).
+pub const TILINGS: usize = 4;
+/// A tiling's fit joins the mean only within this many of the first tiling's σ of it (farther, it
+/// went to another basin).
+pub const TILING_REACH_SIGMA: f64 = 3.0;
 
 /// How the headline σ combined the jackknife with the windows (see the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -179,6 +191,11 @@ pub struct SigmaParts {
     /// quadrature (0 otherwise).
     #[serde(default)]
     pub basins_s: f64,
+    /// The part of one tiling's σ that the mean over [`TILINGS`] tilings of the windows removes
+    /// (their Δt's spread, see `over_tilings`), taken away in quadrature, never below the formal σ
+    /// (0 otherwise: not a constant, or one tiling).
+    #[serde(default)]
+    pub cuts_s: f64,
     pub combined: SigmaCombination,
 }
 
@@ -327,11 +344,15 @@ pub fn pose_clock_model(
     };
     let (profile, mut model) = (chosen.profile, chosen.model);
     let last = mission.resolved(&mut model, last);
+    let (last, cuts_s) = match model.model {
+        OffsetModel::Constant => over_tilings(mission.data, last),
+        _ => (last, 0.0),
+    };
     let valley_s = match (&lead, model.model) {
         (Some(lead), OffsetModel::Constant) => lead.valley_s(&data, &last),
         _ => 0.0,
     };
-    let sigma_parts = set_parameters(&mut model, &last, &profile, valley_s);
+    let sigma_parts = set_parameters(&mut model, &last, &profile, valley_s, cuts_s);
     model.describe();
     // θ₀'s σ as reported: the headline's, or the first segment's.
     let first_sigma_s = match model.model {
@@ -961,6 +982,57 @@ impl Mission<'_, '_> {
     }
 }
 
+/// The constant `last` (fitted on the mission's windows) with its Δt and lever the mean over
+/// [`TILINGS`] tilings of the windows (`last`'s, and each one's cuts shifted by k/`TILINGS` of a
+/// window, fitted from `last`); a tiling's fit that does not converge or lands farther than
+/// [`TILING_REACH_SIGMA`] of `last`'s σ from it is left out. Everything else (the jackknife, the
+/// windows used) stays `last`'s. Also returns the part of one tiling's σ that the mean removes,
+/// seconds: s·√(1 − 1/n), s the standard deviation of the n tilings' Δt (0 for one).
+///
+/// Why: each window holds its own similarity, and which stretch of the slow errors (the estimate's
+/// heading wandering, the reference's bias) and of the speed changes a window holds depends on
+/// where the cuts fall; on a 1–2 Hz reference the same mission's Δt moved by 10–30 ms from one
+/// tiling to the next. Each tiling's error is a part they share (the reference's white noise: the
+/// same samples) and a part the cuts choose, of variance s² when the tilings err apart; the mean
+/// keeps 1/n of the latter, so the constant's σ (one tiling's) loses s²·(1 − 1/n) in quadrature,
+/// never below the formal σ (`set_parameters`). Measured in docs/evidence.md ("The windows' cuts,
+/// averaged").
+fn over_tilings(data: &PoseData<'_>, last: PoseFit) -> (PoseFit, f64) {
+    let reach_s = TILING_REACH_SIGMA * last.theta_sigma[0].max(POSE_SIGMA_FLOOR_S);
+    let with_lever = last.lever_sigma_m.is_some();
+    let fits: Vec<(f64, Vector3<f64>)> = (1..TILINGS)
+        .filter_map(|k| {
+            let windows = data.tiling(k as f64 / TILINGS as f64);
+            pose_fit::fit(
+                data,
+                &windows,
+                ClockShape::Constant,
+                last.theta.clone(),
+                last.lever_m,
+                with_lever,
+            )
+        })
+        .filter(|f| f.converged && (f.theta[0] - last.theta[0]).abs() <= reach_s)
+        .map(|f| (f.theta[0], f.lever_m))
+        .chain([(last.theta[0], last.lever_m)])
+        .collect();
+    let n = fits.len() as f64;
+    let mut mean = last;
+    mean.theta[0] = fits.iter().map(|f| f.0).sum::<f64>() / n;
+    mean.lever_m = fits.iter().map(|f| f.1).sum::<Vector3<f64>>() / n;
+    let cuts_s = if fits.len() > 1 {
+        let var = fits
+            .iter()
+            .map(|f| (f.0 - mean.theta[0]).powi(2))
+            .sum::<f64>()
+            / (n - 1.0);
+        (var * (1.0 - 1.0 / n)).sqrt()
+    } else {
+        0.0
+    };
+    (mean, cuts_s)
+}
+
 /// Whether a piecewise fit tells some two neighbouring segments apart: their offsets differ by more
 /// than [`STEP_RESOLUTION_Z`] σ of the difference (from the fit's covariance, at least
 /// [`POSE_SIGMA_FLOOR_S`] on each side). True for a fit of one segment.
@@ -989,6 +1061,7 @@ fn set_parameters(
     last: &PoseFit,
     profile: &OffsetProfile,
     valley_s: f64,
+    cuts_s: f64,
 ) -> Option<SigmaParts> {
     let sigma = |k: usize, floor_s: Option<f64>| {
         let s = last.theta_sigma[k].max(POSE_SIGMA_FLOOR_S);
@@ -1002,6 +1075,7 @@ fn set_parameters(
         hidden_drift_s: 0.0,
         valley_s: 0.0,
         basins_s: 0.0,
+        cuts_s: 0.0,
         combined,
     };
     // An offset over the windows inside `span`: its σ and what it was made of.
@@ -1040,6 +1114,13 @@ fn set_parameters(
                 _ => 0.0,
             };
             let (sigma_s, parts) = offset_sigma(0, (f64::NEG_INFINITY, f64::INFINITY));
+            // The mean over tilings keeps less of what the cuts choose (`over_tilings`).
+            let sigma_s = (sigma_s * sigma_s - cuts_s * cuts_s)
+                .max(0.0)
+                .sqrt()
+                .max(last.theta_formal_sigma[0])
+                .max(POSE_SIGMA_FLOOR_S)
+                .min(sigma_s);
             // Windows in two basins (see `clock_model::steps_out_and_back`): σ covers both.
             let basins_s = 0.5 * model.alternation_s;
             model.sigma_s =
@@ -1049,6 +1130,7 @@ fn set_parameters(
                 hidden_drift_s: hidden,
                 valley_s,
                 basins_s,
+                cuts_s,
                 ..parts
             })
         }
@@ -1308,6 +1390,7 @@ mod tests {
             &fit(ClockShape::Constant, vec![0.1], vec![ms(0.3)]),
             &p,
             0.0,
+            0.0,
         );
         assert!(
             close(m.offset_s, 0.1) && close(m.sigma_s, ms(0.545f64.sqrt())),
@@ -1320,6 +1403,7 @@ mod tests {
             &fit(ClockShape::Constant, vec![0.1], vec![ms(5.0)]),
             &p,
             0.0,
+            0.0,
         );
         assert!(close(m.sigma_s, ms(13f64.sqrt())), "{m:?}");
         // The formal σ stays the floor.
@@ -1327,7 +1411,8 @@ mod tests {
         sure.theta_jackknife_sigma = vec![ms(0.3)];
         sure.theta_formal_sigma = vec![ms(2.0)];
         let mut m = constant();
-        let parts = set_parameters(&mut m, &sure, &p, 0.0).expect("a constant's σ has its parts");
+        let parts =
+            set_parameters(&mut m, &sure, &p, 0.0, 0.0).expect("a constant's σ has its parts");
         assert!(close(m.sigma_s, ms(2.0)), "{m:?}");
         // The report's `sigma_parts` say so.
         assert_eq!(parts.combined, SigmaCombination::Pooled);
@@ -1339,13 +1424,24 @@ mod tests {
         raised.theta_jackknife_sigma = vec![ms(0.3)];
         raised.theta_formal_sigma = vec![ms(0.5)];
         let mut m = constant();
-        set_parameters(&mut m, &raised, &p, 0.0);
+        set_parameters(&mut m, &raised, &p, 0.0, 0.0);
         assert!(close(m.sigma_s, ms(0.545f64.sqrt())), "{m:?}");
+        // The mean over tilings removes the cuts' part in quadrature (√(0.545 − 0.2²) ms), never
+        // below the formal σ (0.5 ms with 0.7 ms removed).
+        let mut m = constant();
+        let parts = set_parameters(&mut m, &raised, &p, 0.0, ms(0.2)).unwrap();
+        assert!(
+            close(m.sigma_s, ms(0.505f64.sqrt())) && close(parts.cuts_s, ms(0.2)),
+            "{m:?}"
+        );
+        let mut m = constant();
+        set_parameters(&mut m, &raised, &p, 0.0, ms(0.7));
+        assert!(close(m.sigma_s, ms(0.5)), "{m:?}");
         // A jackknife that saw no spread is no estimate: the larger of the fit's σ and the windows'.
         let mut flat = fit(ClockShape::Constant, vec![0.1], vec![ms(0.5)]);
         flat.theta_jackknife_sigma = vec![0.0];
         let mut m = constant();
-        let parts = set_parameters(&mut m, &flat, &p, 0.0).unwrap();
+        let parts = set_parameters(&mut m, &flat, &p, 0.0, 0.0).unwrap();
         assert!(close(m.sigma_s, ms(1.0)) && parts.combined == SigmaCombination::Larger);
         // Windows scattering ±4 ms about the offset with σ 2 ms: theirs grows by the Birge ratio
         // √(χ²/dof) = √(4·4/3) before the pooling.
@@ -1361,6 +1457,7 @@ mod tests {
             &mut m,
             &fit(ClockShape::Constant, vec![0.1], vec![ms(0.3)]),
             &scattered,
+            0.0,
             0.0,
         );
         let windows_s = ms(1.0) * (16.0f64 / 3.0).sqrt();
@@ -1380,14 +1477,14 @@ mod tests {
         lever_free.variance_inflation = vec![4.0];
         assert!(close(lever_free.lever_share_s(0), ms(3f64.sqrt())));
         let mut m = ClockModel::constant(0.0, 0.0, String::new());
-        let parts = set_parameters(&mut m, &lever_free, &p, 0.0).unwrap();
+        let parts = set_parameters(&mut m, &lever_free, &p, 0.0, 0.0).unwrap();
         assert!(close(m.sigma_s, ms(6.5f64.sqrt())), "{m:?}");
         assert!(close(parts.lever_s, ms(3f64.sqrt())));
         assert!(close(parts.windows_s.unwrap(), ms(1.0)));
         // Without a lever (inflation 1) nothing is added: √((3² + 1²)/2) ms.
         lever_free.variance_inflation = vec![1.0];
         let mut m = ClockModel::constant(0.0, 0.0, String::new());
-        let parts = set_parameters(&mut m, &lever_free, &p, 0.0).unwrap();
+        let parts = set_parameters(&mut m, &lever_free, &p, 0.0, 0.0).unwrap();
         assert!(
             close(m.sigma_s, ms(5f64.sqrt())) && parts.lever_s == 0.0,
             "{m:?}"
@@ -1416,6 +1513,7 @@ mod tests {
             &mut m,
             &fit(shape, vec![0.1, 0.2], vec![3e-4, 3e-4]),
             &p,
+            0.0,
             0.0,
         )
         .expect("the headline segment's parts");
@@ -1447,11 +1545,11 @@ mod tests {
         let pooled_s = 13f64.sqrt() * 1e-3;
         // 15 ppm measured with σ 10 ppm: what a constant clock shows by chance; σ stays the pooled.
         let mut m = constant(15.0);
-        set_parameters(&mut m, &fitted, &p, 0.0);
+        set_parameters(&mut m, &fitted, &p, 0.0, 0.0);
         assert!(close(m.sigma_s, pooled_s), "{m:?}");
         // 30 ppm, 3σ: the part beyond its noise, √(30² − 10²) ppm, over the windows' spread.
         let mut m = constant(-30.0);
-        set_parameters(&mut m, &fitted, &p, 0.0);
+        set_parameters(&mut m, &fitted, &p, 0.0, 0.0);
         let hidden_s = 800f64.sqrt() * 1e-6 * spread_s;
         assert!(
             close(m.sigma_s, (pooled_s.powi(2) + hidden_s * hidden_s).sqrt()),
@@ -1477,6 +1575,7 @@ mod tests {
             &fit(shape.clone(), vec![0.1, -48e-6], vec![2e-4, 1e-6]),
             &p,
             0.0,
+            0.0,
         );
         assert!(close(m.drift_ppm.unwrap(), 48.0));
         assert!(close(m.drift_sigma_ppm.unwrap(), 3.0));
@@ -1487,6 +1586,7 @@ mod tests {
             &mut m,
             &fit(shape, vec![0.1, -48e-6], vec![0.004, 5e-6]),
             &p,
+            0.0,
             0.0,
         );
         assert!(close(m.drift_sigma_ppm.unwrap(), 5.0) && close(m.sigma_s, 0.004));
@@ -1610,6 +1710,7 @@ mod tests {
             &fit(ClockShape::Constant, vec![0.1], vec![2e-3]),
             &p,
             0.215,
+            0.0,
         )
         .unwrap();
         assert!(m.sigma_s > 0.215 && m.sigma_s < 0.2151, "{m:?}");
@@ -1628,6 +1729,7 @@ mod tests {
             &mut m,
             &fit(ClockShape::Constant, vec![0.1], vec![2e-3]),
             &p,
+            0.0,
             0.0,
         )
         .unwrap();

@@ -104,7 +104,7 @@ pub use shared::{
     coarse_minima, coarse_start, fit, window_residuals, ScanMinimum, LEAD_MAX_ITERATIONS,
     MAX_ITERATIONS,
 };
-pub use window::{locate_change, windows, Window};
+pub use window::{locate_change, tiling, windows, Window};
 
 /// Length of a window, seconds (a window holds at least [`MIN_WINDOW_SAMPLES`] reference samples:
 /// longer at low reference rates).
@@ -346,6 +346,11 @@ impl<'a> PoseData<'a> {
     /// The windows of this mission.
     pub fn windows(&self) -> Vec<Window> {
         windows(self.ref_t, self.params.window_s)
+    }
+
+    /// The windows of this mission with every cut moved later by `phase` of a window ([`tiling`]).
+    pub fn tiling(&self, phase: f64) -> Vec<Window> {
+        tiling(self.ref_t, self.params.window_s, phase)
     }
 
     /// The profile's windows: those of [`Self::windows`] (disjoint), or with `step_s` shorter than

@@ -520,3 +520,33 @@ fn the_jackknife_refits_a_window_whose_one_step_runs_away() {
         );
     }
 }
+
+proptest::proptest! {
+    /// Every tiling holds every reference sample in exactly one window, in order, each window
+    /// between half a window and one and a half long; phase 0 is the mission's windows.
+    #[test]
+    fn every_tiling_covers_the_span_once_with_windows_half_to_one_and_a_half_long(
+        span_s in 30.0f64..900.0,
+        rate_hz in proptest::sample::select(vec![1.0, 2.0, 5.0, 20.0]),
+        window_s in 10.0f64..40.0,
+        phase in 0.0f64..1.0,
+    ) {
+        let t: Vec<f64> = (0..=(span_s * rate_hz) as usize).map(|k| k as f64 / rate_hz).collect();
+        let base = windows(&t, Some(window_s));
+        proptest::prop_assume!(!base.is_empty());
+        let len = base[0].t_end - base[0].t_start;
+        let w = tiling(&t, Some(window_s), phase);
+        proptest::prop_assert_eq!(w[0].range.start, 0);
+        proptest::prop_assert_eq!(w[w.len() - 1].range.end, t.len());
+        for pair in w.windows(2) {
+            proptest::prop_assert_eq!(pair[0].range.end, pair[1].range.start);
+        }
+        for x in &w {
+            let l = x.t_end - x.t_start;
+            proptest::prop_assert!(l >= 0.5 * len - 1e-6 && l <= 1.5 * len + 1e-6, "{} of {}", l, len);
+        }
+        let zero: Vec<_> = tiling(&t, Some(window_s), 0.0).iter().map(|x| x.range.clone()).collect();
+        let base: Vec<_> = base.iter().map(|x| x.range.clone()).collect();
+        proptest::prop_assert_eq!(zero, base);
+    }
+}

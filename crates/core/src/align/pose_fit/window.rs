@@ -738,6 +738,24 @@ fn rotation_of(cov: &Matrix3<f64>) -> Matrix3<f64> {
 /// Cuts the reference's span into windows of [`WINDOW_S`] (or longer, to hold
 /// [`MIN_WINDOW_SAMPLES`] at the reference's median rate).
 pub fn windows(ref_t: &[f64], window_s: Option<f64>) -> Vec<Window> {
+    tiling(ref_t, window_s, 0.0)
+}
+
+/// The windows of [`windows`] with every cut moved later by `phase` (a fraction of a window in
+/// [0, 1)); the first and the last window take what is left at the ends, each between half a
+/// window and one and a half (`phase` 0: [`windows`]).
+///
+/// ```
+/// use trajdrift_core::align::pose_fit::{tiling, windows};
+/// let t: Vec<f64> = (0..=1000).map(|k| 0.1 * k as f64).collect(); // 100 s at 10 Hz
+/// let cuts = |w: &[trajdrift_core::align::pose_fit::Window]| -> Vec<f64> {
+///     w.iter().map(|w| w.t_start).collect()
+/// };
+/// assert_eq!(cuts(&windows(&t, Some(20.0))), [0.0, 20.0, 40.0, 60.0, 80.0]);
+/// assert_eq!(cuts(&tiling(&t, Some(20.0), 0.25)), [0.0, 25.0, 45.0, 65.0, 85.0]);
+/// assert_eq!(cuts(&tiling(&t, Some(20.0), 0.75)), [0.0, 15.0, 35.0, 55.0, 75.0]);
+/// ```
+pub fn tiling(ref_t: &[f64], window_s: Option<f64>, phase: f64) -> Vec<Window> {
     let n = ref_t.len();
     if n < MIN_WINDOW_SAMPLES {
         return Vec::new();
@@ -748,9 +766,15 @@ pub fn windows(ref_t: &[f64], window_s: Option<f64>) -> Vec<Window> {
     let count = ((b - a) / len).floor().max(1.0) as usize;
     // The windows share the span evenly (no sliver at the end).
     let len = (b - a) / count as f64;
+    // The cuts a + (k + phase)·len, less those within half a window of either end.
+    let inner = (0..=count)
+        .map(|k| a + (k as f64 + phase) * len)
+        .filter(|&c| c - a >= 0.5 * len - 1e-9 && b - c >= 0.5 * len - 1e-9 && c > a && c < b);
+    let cuts: Vec<f64> = std::iter::once(a).chain(inner).chain([b]).collect();
+    let count = cuts.len() - 1;
     (0..count)
         .map(|k| {
-            let (lo, hi) = (a + k as f64 * len, a + (k + 1) as f64 * len);
+            let (lo, hi) = (cuts[k], cuts[k + 1]);
             let start = ref_t.partition_point(|&t| t < lo);
             let end = if k + 1 == count {
                 n
