@@ -41,7 +41,9 @@
 //!    ([`TILINGS`], `over_tilings`): where the cuts fall chooses part of each window's slow errors,
 //!    and on 1–2 Hz references that part moved Δt by 10–30 ms from one tiling to the next. The
 //!    offset's σ loses, in quadrature, what the mean removes of the tilings' spread, at least the
-//!    formal σ (`sigma_parts.cuts_s`; docs/evidence.md, "The windows' cuts, averaged").
+//!    formal σ (`sigma_parts.cuts_s`; docs/evidence.md, "The windows' cuts, averaged"). Not where
+//!    the fit's σ is below [`TILINGS_FROM_SIGMA_S`]: there the mean moves Δt by less, and costs
+//!    a long mission's evaluation half its time again.
 //!
 //! **The lead search.** The signal searches read a sensor ahead of the other as a clock offset of
 //! lever/speed (at a walk, a 0.3 m lever is a second), and the fit from there stays in the long
@@ -149,6 +151,12 @@ pub const TILINGS: usize = 4;
 /// A tiling's fit joins the mean only within this many of the first tiling's σ of it (farther, it
 /// went to another basin).
 pub const TILING_REACH_SIGMA: f64 = 3.0;
+/// A constant whose fit's σ (the jackknife's, at least the formal) is below this is not averaged
+/// over tilings, seconds: the tilings' Δt spread by about one tiling's σ, so the mean would move
+/// it by a fraction of a millisecond, while three more fits of a two-hour mission on a 10 Hz
+/// reference (σ 0.2 ms) made its evaluation take 1.67 times as long (docs/evidence.md, "The
+/// windows' cuts, averaged").
+pub const TILINGS_FROM_SIGMA_S: f64 = 1e-3;
 
 /// How the headline σ combined the jackknife with the windows (see the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -985,7 +993,8 @@ impl Mission<'_, '_> {
 /// The constant `last` (fitted on the mission's windows) with its Δt and lever the mean over
 /// [`TILINGS`] tilings of the windows (`last`'s, and each one's cuts shifted by k/`TILINGS` of a
 /// window, fitted from `last`); a tiling's fit that does not converge or lands farther than
-/// [`TILING_REACH_SIGMA`] of `last`'s σ from it is left out. Everything else (the jackknife, the
+/// [`TILING_REACH_SIGMA`] of `last`'s σ from it is left out; `last` alone where its σ is below
+/// [`TILINGS_FROM_SIGMA_S`]. Everything else (the jackknife, the
 /// windows used) stays `last`'s. Also returns the part of one tiling's σ that the mean removes,
 /// seconds: s·√(1 − 1/n), s the standard deviation of the n tilings' Δt (0 for one).
 ///
@@ -998,6 +1007,9 @@ impl Mission<'_, '_> {
 /// never below the formal σ (`set_parameters`). Measured in docs/evidence.md ("The windows' cuts,
 /// averaged").
 fn over_tilings(data: &PoseData<'_>, last: PoseFit) -> (PoseFit, f64) {
+    if last.theta_sigma[0] < TILINGS_FROM_SIGMA_S {
+        return (last, 0.0);
+    }
     let reach_s = TILING_REACH_SIGMA * last.theta_sigma[0].max(POSE_SIGMA_FLOOR_S);
     let with_lever = last.lever_sigma_m.is_some();
     let fits: Vec<(f64, Vector3<f64>)> = (1..TILINGS)
