@@ -12,8 +12,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::style::{
-    category_chart, decimate, label_font, legend, padded_range, plot_err, series_color, title_font,
-    viridis, xy_chart, Draw, FAMILY, MAX_POINTS,
+    category_at, category_chart, decimate, label_font, legend, padded_range, plot_err,
+    series_color, title_font, viridis, xy_chart, Draw, FAMILY, MAX_POINTS,
 };
 use crate::error::{Error, Result};
 use crate::stats::quantile_sorted;
@@ -438,12 +438,10 @@ impl Draw for StatsBars {
             .configure_mesh()
             .y_labels(g)
             .y_label_formatter(&|y| {
-                let i = y.round();
-                if (y - i).abs() < 1e-6 && i >= 0.0 {
-                    names.get(g - 1 - i as usize).cloned().unwrap_or_default()
-                } else {
-                    String::new()
-                }
+                category_at(*y)
+                    .and_then(|i| g.checked_sub(1 + i))
+                    .and_then(|i| names.get(i).cloned())
+                    .unwrap_or_default()
             })
             .x_desc(self.value_label.as_str())
             .label_style(label_font())

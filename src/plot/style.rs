@@ -153,6 +153,13 @@ pub fn xy_chart<'a, DB: DrawingBackend>(
     Ok(chart)
 }
 
+/// The category a category axis's tick at `v` names: its index where `v` is a whole number at or
+/// above 0, none between categories.
+pub fn category_at(v: f64) -> Option<usize> {
+    let i = v.round();
+    ((v - i).abs() < 1e-6 && i >= 0.0).then_some(i as usize)
+}
+
 /// A titled chart with one category per label along x (at 0, 1, …, named by `labels`) over `y`, the
 /// frame of box and violin plots; `y_label_area` is the width left for the y ticks, in pixels.
 pub fn category_chart<'a, DB: DrawingBackend>(
@@ -175,12 +182,9 @@ pub fn category_chart<'a, DB: DrawingBackend>(
         .configure_mesh()
         .x_labels(n)
         .x_label_formatter(&|x| {
-            let i = x.round();
-            if (x - i).abs() < 1e-6 && i >= 0.0 {
-                labels.get(i as usize).cloned().unwrap_or_default()
-            } else {
-                String::new()
-            }
+            category_at(*x)
+                .and_then(|i| labels.get(i).cloned())
+                .unwrap_or_default()
         })
         .x_desc(x_desc)
         .y_desc(y_desc)
