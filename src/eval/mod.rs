@@ -1049,7 +1049,7 @@ fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
     );
     if let Some(r) = pc.replaced {
         note.push_str(&format!(
-            "; the windows started from that answer chose {} ({:+.3} s first), but the lead search found this constant {:+.3} s away, fitting the windows better, and its own windows choose a constant too{}",
+            "; the windows started from that answer chose {} ({:+.3} s first), but the lead search found this constant {:+.3} s away, fitting the referee's longer windows better, and its own windows choose a constant too{}",
             r.model.as_str(),
             r.first_s,
             pc.first_offset.0 - r.first_s,
@@ -1072,7 +1072,7 @@ fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
     }
     if let Some(valley_s) = pc.sigma_parts.map(|p| p.valley_s).filter(|v| *v > 0.0) {
         note.push_str(&format!(
-            "; a fit {:.2} s away, the sensor moved along the direction of travel, fits the windows about as well (a forward lever and Δt trade at a steady walk): σ covers it",
+            "; a fit {:.2} s away, the sensor moved along the direction of travel, fits the referee's longer windows about as well (a forward lever and Δt trade at a steady walk): σ covers it",
             2.0 * valley_s
         ));
     } else if pc.fit.as_ref().is_some_and(|f| f.inseparable()) {

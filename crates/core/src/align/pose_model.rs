@@ -57,7 +57,17 @@
 //! from the scan's best minima (with the lever found there, else none; one that leaves its
 //! minimum's basin is made again on [`pose_fit::NARROW_JACOBIAN_PERIODS`], as a gait's bob can
 //! turn the default Jacobian negative) and compete with the near
-//! fit on their residual per point over every window. The best replaces the near fit when the
+//! fit on their residual per point over the **referee's windows**: [`REFEREE_WINDOW_S`] long (at
+//! most a sixth of the mission), each fit's Δt held and the lever settled there
+//! ([`pose_fit::residuals_at`]). A 20 s window's own heading and translation take an along-track
+//! shift of the path as it comes, so on the fits' windows the valley is nearly flat; over 80 s the
+//! speed changes, and the truth's basin is the deepest where on 20 s windows another was (the scan
+//! runs on the referee's windows too). A fit the referee finds worse than the minimum it started
+//! from beyond [`LEAD_SIGNIFICANCE_T`] (it climbed out of that basin), and a minimum by the near
+//! fit that it finds better than the near fit, are fitted again on the referee's windows from
+//! the minimum (where a jump of the estimate leaves the referee fewer than three windows, the
+//! fits' own windows judge). The best replaces the near fit (in the near fit's basin only when
+//! better beyond the paired t) when the
 //! profile measured from it chooses a constant clock too (only then: across a clock step the
 //! constant trades its lever for Δt as well, and the other segment's basin fits better); where
 //! fewer than three of that profile's windows converge on the default Jacobian, it is measured on
@@ -66,10 +76,10 @@
 //! near fit, worse by a paired t of 25, stayed 655 ms off; on the narrow one all 44 lay within 5 ms
 //! of it). Where another fit (or the scan's minimum it started from, where that fits the windows
 //! better than the fit that climbed from it) is not worse beyond [`LEAD_SIGNIFICANCE_T`] (a paired
-//! t over the windows' residuals: the windows are independent where the points are not), the data
+//! t over the referee's windows' residuals: the windows are independent where the points are not), the data
 //! cannot tell the two apart, and the constant's σ adds half their distance in quadrature
 //! (`sigma_parts.valley_s`). Measured on a second simulator's missions (docs/evidence.md, "A
-//! second simulator, and the lead search").
+//! second simulator, and the lead search", "The valley refereed on longer windows").
 //!
 //! A constant clock whose drift the data cannot resolve could still hide one below the resolution:
 //! when the profile's line measures a drift d beyond [`HIDDEN_DRIFT_Z`] of its σ_d (a drift the data
@@ -120,8 +130,19 @@ pub const LEAD_SIGNIFICANCE_T: f64 = 2.0;
 /// Other confident searches' answers farther than this from the applied one are not scanned
 /// about, seconds (twice the largest lead: a search that far off found something else).
 pub const MAX_ANSWER_SPREAD_S: f64 = 2.0 * MAX_LEAD_S;
-/// The lead search's scan looks at this many windows at most (evenly spread).
-pub const LEAD_SCAN_WINDOWS: usize = 60;
+/// The lead search's scan looks at this many of the referee's windows at most (evenly spread:
+/// 1200 s of a long mission).
+pub const LEAD_SCAN_WINDOWS: usize = 15;
+/// The lead search's referee compares Δt along the valley on windows this long, seconds (at least
+/// the fit's, at most the mission's span over [`REFEREE_MIN_WINDOWS`]). A window's similarity
+/// (its own heading, scale and translation) takes an along-track shift of the path as it comes:
+/// on a straight or a steadily curving stretch the shift is a rotation and a translation. What
+/// tells Δt from a forward lever is the speed changing, and within 20 s it barely does; over 80 s
+/// the truth's basin fits best where on 20 s windows another did (docs/evidence.md, "The valley
+/// refereed on longer windows").
+pub const REFEREE_WINDOW_S: f64 = 80.0;
+/// The referee's windows are at most the mission's span over this many (its paired t needs some).
+pub const REFEREE_MIN_WINDOWS: usize = 6;
 /// The lead search runs where the lead can exceed this many times [`MAX_DISAGREEMENT_S`] (below
 /// 0.83 m/s: walking robots; a vehicle's speed search, immune to a forward lever, starts the fit
 /// near enough, and the search would cost a long mission's evaluation a fifth more).
@@ -449,14 +470,16 @@ pub fn scale_prior_m(moving_speed_mps: Option<f64>) -> f64 {
 }
 
 /// What the lead search found: the fits along the forward lever's valley (the near one among
-/// them) over `windows` (the mission's, less those any of the fits left out as jumps).
+/// them), judged over `windows` (the referee's, [`referee_windows`], less those holding a window
+/// any of the fits left out as a jump).
 struct Lead {
     windows: Vec<pose_fit::Window>,
     fits: Vec<LeadFit>,
 }
 
-/// A fit along the valley: its residual per point in every window of [`Lead::windows`], and the
-/// scan's minimum it started from (`None`: the near fit).
+/// A fit along the valley: the residual per point at its Δt in every window of [`Lead::windows`]
+/// (the lever settled there, [`pose_fit::residuals_at`]), and the scan's minimum it started from
+/// (`None`: the near fit).
 struct LeadFit {
     fit: PoseFit,
     residuals: Vec<Option<f64>>,
@@ -487,7 +510,14 @@ impl Lead {
             .fits
             .iter()
             .min_by(|a, b| mean(&a.residuals).total_cmp(&mean(&b.residuals)))?;
-        (!near.is_some_and(|n| same_basin(n, &best.fit))).then(|| best.fit.clone())
+        // In the near fit's basin, the best replaces it only where the referee finds it better
+        // beyond the paired t (a fit made again on the referee's windows by the truth's minimum).
+        let near_fit = self.fits.iter().find(|f| f.from.is_none());
+        let beaten = |n: &LeadFit| {
+            !std::ptr::eq(n, best) && paired_t(&n.residuals, &best.residuals) >= LEAD_SIGNIFICANCE_T
+        };
+        (!near.is_some_and(|n| same_basin(n, &best.fit)) || near_fit.is_some_and(beaten))
+            .then(|| best.fit.clone())
     }
 
     /// Half the largest distance from `reported`'s Δt to a fit the windows do not find worse beyond
@@ -501,19 +531,13 @@ impl Lead {
     /// reference of a walking robot) a fit climbed 80 ms up the ripple from the minimum by the
     /// truth to a residual a fifth higher; the minimum itself fits the windows as well as the fit
     /// 0.4 s off that was reported, under a σ of 11 ms. The minimum is weighed as the scan found
-    /// it (Δt and the lever solved there) with `reported`'s scale. Only the fitted minima: the
+    /// it (at its Δt, the lever settled there, as every candidate). Only the fitted minima: the
     /// scan's others, weighed too, are more chances for a worse one to pass the test (one mission
     /// right within 1 ms went from σ 5 ms to 336 ms; docs/evidence.md).
     fn valley_s(&self, data: &PoseData<'_>, reported: &PoseFit) -> f64 {
-        let residuals = pose_fit::window_residuals(data, &self.windows, reported);
-        let at_minimum = |m: &pose_fit::ScanMinimum| {
-            let at = PoseFit {
-                theta: vec![m.offset_s],
-                lever_m: m.lever_m,
-                ..reported.clone()
-            };
-            pose_fit::window_residuals(data, &self.windows, &at)
-        };
+        let at = |offset_s: f64| pose_fit::residuals_at(data, &self.windows, offset_s);
+        let residuals = at(reported.theta[0]);
+        let at_minimum = |m: &pose_fit::ScanMinimum| at(m.offset_s);
         let candidates = self.candidates(reported.theta[0], at_minimum);
         undecided_reach_s(reported.theta[0], &residuals, candidates)
     }
@@ -594,6 +618,32 @@ fn patient<'d>(data: &PoseData<'d>) -> PoseData<'d> {
     }
 }
 
+/// The lead search's referee's windows: [`REFEREE_WINDOW_S`] long, at least as long as the fit's
+/// `windows`, at most the mission's span over [`REFEREE_MIN_WINDOWS`].
+fn referee_windows(data: &PoseData<'_>, windows: &[pose_fit::Window]) -> Vec<pose_fit::Window> {
+    let fit_s = windows
+        .iter()
+        .map(|w| w.t_end - w.t_start)
+        .fold(0.0, f64::max);
+    let span_s = match (data.ref_t.first(), data.ref_t.last()) {
+        (Some(a), Some(b)) => b - a,
+        _ => 0.0,
+    };
+    pose_fit::windows(data.ref_t, Some(referee_length_s(fit_s, span_s)))
+}
+
+/// The referee's window length for fit windows `fit_s` long over a mission spanning `span_s`:
+/// [`REFEREE_WINDOW_S`], at most `span_s` over [`REFEREE_MIN_WINDOWS`], at least `fit_s`, seconds.
+///
+/// ```text
+/// fit 20 s:  span 900 s → 80 s;  span 300 s → 50 s;  span 90 s → 20 s
+/// ```
+fn referee_length_s(fit_s: f64, span_s: f64) -> f64 {
+    (span_s / REFEREE_MIN_WINDOWS as f64)
+        .min(REFEREE_WINDOW_S)
+        .max(fit_s)
+}
+
 /// Two constant fits in one basin: their Δt within [`SAME_BASIN_S`].
 fn same_basin(a: &PoseFit, b: &PoseFit) -> bool {
     (a.theta[0] - b.theta[0]).abs() <= SAME_BASIN_S
@@ -633,8 +683,9 @@ fn lead_search(
         return None;
     }
     let (lo_s, hi_s) = (lo_s - lead_s, hi_s + lead_s);
-    let stride = windows.len().div_ceil(LEAD_SCAN_WINDOWS).max(1);
-    let sample: Vec<pose_fit::Window> = windows.iter().step_by(stride).cloned().collect();
+    let referee = referee_windows(data, windows);
+    let stride = referee.len().div_ceil(LEAD_SCAN_WINDOWS).max(1);
+    let sample: Vec<pose_fit::Window> = referee.iter().step_by(stride).cloned().collect();
     let minima = pose_fit::coarse_minima(
         data,
         &sample,
@@ -647,7 +698,7 @@ fn lead_search(
     // `LEAD_MAX_ITERATIONS`: along the valley a fit can creep toward its root.
     let narrow = patient(&narrowed(data));
     let data = &patient(data);
-    let fit_in = |data: &PoseData<'_>, theta: f64, lever: Vector3<f64>| {
+    let fit_on = |data: &PoseData<'_>, windows: &[pose_fit::Window], theta: f64, lever| {
         pose_fit::fit(
             data,
             windows,
@@ -662,8 +713,10 @@ fn lead_search(
                 && f.theta[0] <= hi_s + MAX_DISAGREEMENT_S
         })
     };
+    let fit_in = |data: &PoseData<'_>, theta: f64, lever| fit_on(data, windows, theta, lever);
     let far = minima
-        .into_iter()
+        .iter()
+        .copied()
         .filter(|m| near.is_none_or(|n| (n.theta[0] - m.offset_s).abs() > SAME_BASIN_S))
         .take(LEAD_MINIMA)
         .filter_map(|m| {
@@ -682,20 +735,50 @@ fn lead_search(
         });
     let fits: Vec<(PoseFit, Option<pose_fit::ScanMinimum>)> =
         far.chain(near.cloned().map(|f| (f, None))).collect();
-    // Windows a fit left out (a jump of the estimate) would weigh on every comparison.
-    let kept: Vec<pose_fit::Window> = windows
-        .iter()
-        .filter(|w| {
-            !fits
+    // Windows a fit left out (a jump of the estimate) would weigh on every comparison; where that
+    // leaves the referee too few, the fits' own windows judge.
+    let left_out = |w: &pose_fit::Window| {
+        fits.iter().any(|(f, _)| {
+            f.outliers
                 .iter()
-                .any(|(f, _)| f.outliers.iter().any(|o| o.t_start == w.t_start))
+                .any(|o| o.t_start < w.t_end && o.t_end > w.t_start)
         })
-        .cloned()
+    };
+    let mut kept: Vec<pose_fit::Window> = referee.into_iter().filter(|w| !left_out(w)).collect();
+    if kept.len() < MIN_POOLED_WINDOWS {
+        kept = windows.iter().filter(|w| !left_out(w)).cloned().collect();
+    }
+    // Where the referee finds a fit worse than the minimum it started from (it climbed out of the
+    // basin the referee sees: the fit's windows are shorter), or a minimum within the near fit's
+    // basin better than the near fit, the fit is made again on the referee's windows from there
+    // and kept where it stays by the minimum.
+    let at = |offset_s: f64| pose_fit::residuals_at(data, &kept, offset_s);
+    let worse = |fit: &PoseFit, m: &pose_fit::ScanMinimum| {
+        paired_t(&at(fit.theta[0]), &at(m.offset_s)) >= LEAD_SIGNIFICANCE_T
+    };
+    let again = |m: &pose_fit::ScanMinimum| {
+        fit_on(data, &kept, m.offset_s, m.lever_m)
+            .filter(|f| (f.theta[0] - m.offset_s).abs() <= SAME_BASIN_S)
+    };
+    let mut fits: Vec<(PoseFit, Option<pose_fit::ScanMinimum>)> = fits
+        .into_iter()
+        .map(|(f, from)| match from {
+            Some(m) if worse(&f, &m) => (again(&m).unwrap_or(f), from),
+            _ => (f, from),
+        })
         .collect();
-    let fits = fits
+    if let Some(n) = near {
+        let by_near = minima
+            .iter()
+            .find(|m| (n.theta[0] - m.offset_s).abs() <= SAME_BASIN_S);
+        if let Some(m) = by_near.filter(|m| worse(n, m)) {
+            fits.extend(again(m).map(|f| (f, Some(*m))));
+        }
+    }
+    let fits: Vec<LeadFit> = fits
         .into_iter()
         .map(|(fit, from)| LeadFit {
-            residuals: pose_fit::window_residuals(data, &kept, &fit),
+            residuals: pose_fit::residuals_at(data, &kept, fit.theta[0]),
             fit,
             from,
         })
@@ -1643,23 +1726,14 @@ mod tests {
         let mut broken = base.clone();
         broken[3] = Some(f64::NAN);
         assert!(paired_t(&broken, &base).is_nan());
-        // The far fit is the best on the windows every fit has, unless it is in the near basin.
-        let lead = Lead {
-            windows: Vec::new(),
-            fits: [
-                (at(0.43), shifted(0.005, 0.1)),
-                (at(0.9), shifted(0.2, 0.01)),
-                (at(0.05), shifted(-0.001, 0.1)),
-            ]
-            .into_iter()
-            .map(|(fit, residuals)| LeadFit {
-                fit,
-                residuals,
-                from: None,
-            })
-            .collect(),
+        // The far fit is the best on the windows every fit has, unless it is in the near basin
+        // (the near fit: `from` none) and not better than the near fit beyond the paired t.
+        let minimum = |offset_s: f64| pose_fit::ScanMinimum {
+            offset_s,
+            cost_m2: 1.0,
+            lever_m: Vector3::zeros(),
         };
-        let lead = Lead {
+        let lead_of = |fits: Vec<(PoseFit, Vec<Option<f64>>, bool)>| Lead {
             windows: vec![
                 pose_fit::Window {
                     range: 0..0,
@@ -1668,10 +1742,38 @@ mod tests {
                 };
                 20
             ],
-            ..lead
+            fits: fits
+                .into_iter()
+                .map(|(fit, residuals, near)| LeadFit {
+                    from: (!near).then(|| minimum(fit.theta[0])),
+                    fit,
+                    residuals,
+                })
+                .collect(),
         };
+        let lead = lead_of(vec![
+            (at(0.43), shifted(0.005, 0.1), false),
+            (at(0.9), shifted(0.2, 0.01), false),
+            (at(0.05), shifted(-0.001, 0.1), true),
+        ]);
         assert_eq!(lead.far(Some(&at(0.5))).map(|f| f.theta[0]), Some(0.05));
-        assert!(lead.far(Some(&at(0.1))).is_none());
+        assert!(lead.far(Some(&at(0.05))).is_none());
+        // In the near fit's basin: a fit the referee finds better in every window replaces it,
+        // one as good within the windows' scatter does not.
+        let in_basin = |residuals: Vec<Option<f64>>| {
+            lead_of(vec![
+                (at(0.1), shifted(0.02, 0.001), true),
+                (at(0.15), residuals, false),
+            ])
+            .far(Some(&at(0.1)))
+            .map(|f| f.theta[0])
+        };
+        assert_eq!(in_basin(base.clone()), Some(0.15));
+        assert_eq!(in_basin(shifted(0.019, 0.1)), None);
+        // The referee's windows: 80 s, fewer on a short mission, never shorter than the fit's.
+        assert_eq!(referee_length_s(20.0, 900.0), REFEREE_WINDOW_S);
+        assert_eq!(referee_length_s(20.0, 300.0), 50.0);
+        assert_eq!(referee_length_s(20.0, 90.0), 20.0);
         // The valley reaches to the farthest candidate as good, not to one in the basin or one
         // worse in every window.
         let reach = |c: Vec<(f64, Vec<Option<f64>>)>| undecided_reach_s(0.1, &base, c);

@@ -161,29 +161,11 @@ pub fn coarse_minima(
     let k = (span_s / step_s).round() as i64;
     let scan: Vec<ScanMinimum> = (-k..=k)
         .map(|i| {
-            let theta = [start_s + i as f64 * step_s];
-            let mut lever = Vector3::zeros();
-            let mut terms = fit.eval(&theta, &lever, 1.0);
-            for _ in 0..COARSE_LEVER_STEPS {
-                let (_, j, g) = fit.summed(&terms, &lever, lever_weight(&terms), 1.0);
-                let Some(step) = j
-                    .view((1, 1), (3, 3))
-                    .into_owned()
-                    .lu()
-                    .solve(&g.rows(1, 3).into_owned())
-                else {
-                    break;
-                };
-                let step = Vector3::new(step[0], step[1], step[2]);
-                lever -= step;
-                terms = fit.eval(&theta, &lever, 1.0);
-                if step.norm() < COARSE_LEVER_TOLERANCE_M {
-                    break;
-                }
-            }
+            let theta = start_s + i as f64 * step_s;
+            let (lever, terms) = lever_settled(&fit, theta);
             let (rss, n) = residual_sums(&terms);
             ScanMinimum {
-                offset_s: theta[0],
+                offset_s: theta,
                 cost_m2: if n > 0 { rss / n as f64 } else { f64::INFINITY },
                 lever_m: lever,
             }
@@ -202,6 +184,48 @@ pub fn coarse_minima(
     minima
 }
 
+/// The lever settled at the constant Δt `offset_s` (Newton steps from none, [`COARSE_LEVER_STEPS`]
+/// at most) and the windows' terms there, each window's similarity solved.
+fn lever_settled(fit: &SharedFit<'_>, offset_s: f64) -> (Vector3<f64>, Vec<Option<Terms>>) {
+    let theta = [offset_s];
+    let mut lever = Vector3::zeros();
+    let mut terms = fit.eval(&theta, &lever, 1.0);
+    for _ in 0..COARSE_LEVER_STEPS {
+        let (_, j, g) = fit.summed(&terms, &lever, lever_weight(&terms), 1.0);
+        let Some(step) = j
+            .view((1, 1), (3, 3))
+            .into_owned()
+            .lu()
+            .solve(&g.rows(1, 3).into_owned())
+        else {
+            break;
+        };
+        let step = Vector3::new(step[0], step[1], step[2]);
+        lever -= step;
+        terms = fit.eval(&theta, &lever, 1.0);
+        if step.norm() < COARSE_LEVER_TOLERANCE_M {
+            break;
+        }
+    }
+    (lever, terms)
+}
+
+/// Each window's residual per point at the constant Δt `offset_s` with the lever settled there as
+/// [`coarse_minima`] settles it, squared metres (`None` for a window without points): candidates
+/// for Δt compared alike, whatever fit (or scan) proposed them.
+pub fn residuals_at(data: &PoseData<'_>, windows: &[Window], offset_s: f64) -> Vec<Option<f64>> {
+    let problem = data.problem();
+    let fit = SharedFit::new(&problem, windows, &ClockShape::Constant, true);
+    per_point(lever_settled(&fit, offset_s).1)
+}
+
+fn per_point(terms: Vec<Option<Terms>>) -> Vec<Option<f64>> {
+    terms
+        .into_iter()
+        .map(|t| t.filter(|t| t.n > 0).map(|t| t.rss / t.n as f64))
+        .collect()
+}
+
 /// Each window's residual per point under the constant clock `fit` (its Δt, lever and scale),
 /// squared metres; `None` for a window without points. Two fits of one mission are told apart on
 /// these: their mean, and their differences window by window, which are
@@ -213,11 +237,7 @@ pub fn window_residuals(
 ) -> Vec<Option<f64>> {
     let problem = data.problem();
     let shared = SharedFit::new(&problem, windows, &ClockShape::Constant, true);
-    shared
-        .eval(&fit.theta, &fit.lever_m, fit.scale)
-        .into_iter()
-        .map(|t| t.filter(|t| t.n > 0).map(|t| t.rss / t.n as f64))
-        .collect()
+    per_point(shared.eval(&fit.theta, &fit.lever_m, fit.scale))
 }
 
 /// Gauss–Newton with backtracking over the shared parameters, then the jackknife.
