@@ -101,8 +101,8 @@ pub use profile::{
     profile, scatter_calibration, scatter_factor, WindowOffset, WindowScatter, WindowSearch,
 };
 pub use shared::{
-    coarse_minima, coarse_start, fit, residuals_at, window_residuals, ScanMinimum,
-    LEAD_MAX_ITERATIONS, MAX_ITERATIONS,
+    coarse_minima, coarse_start, fit, residuals_at, ScanMinimum, LEAD_MAX_ITERATIONS,
+    MAX_ITERATIONS,
 };
 pub use window::{locate_change, tiling, windows, Window};
 

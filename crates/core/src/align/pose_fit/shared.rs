@@ -212,7 +212,9 @@ fn lever_settled(fit: &SharedFit<'_>, offset_s: f64) -> (Vector3<f64>, Vec<Optio
 
 /// Each window's residual per point at the constant Δt `offset_s` with the lever settled there as
 /// [`coarse_minima`] settles it, squared metres (`None` for a window without points): candidates
-/// for Δt compared alike, whatever fit (or scan) proposed them.
+/// for Δt compared alike, whatever fit (or scan) proposed them: on their mean, and on their
+/// differences window by window, which are independent where the candidates' shared residuals (the
+/// gait, a wandering bias) are not.
 pub fn residuals_at(data: &PoseData<'_>, windows: &[Window], offset_s: f64) -> Vec<Option<f64>> {
     let problem = data.problem();
     let fit = SharedFit::new(&problem, windows, &ClockShape::Constant, true);
@@ -224,20 +226,6 @@ fn per_point(terms: Vec<Option<Terms>>) -> Vec<Option<f64>> {
         .into_iter()
         .map(|t| t.filter(|t| t.n > 0).map(|t| t.rss / t.n as f64))
         .collect()
-}
-
-/// Each window's residual per point under the constant clock `fit` (its Δt, lever and scale),
-/// squared metres; `None` for a window without points. Two fits of one mission are told apart on
-/// these: their mean, and their differences window by window, which are
-/// independent where the fits' shared residuals (the gait, a wandering bias) are not.
-pub fn window_residuals(
-    data: &PoseData<'_>,
-    windows: &[Window],
-    fit: &PoseFit,
-) -> Vec<Option<f64>> {
-    let problem = data.problem();
-    let shared = SharedFit::new(&problem, windows, &ClockShape::Constant, true);
-    per_point(shared.eval(&fit.theta, &fit.lever_m, fit.scale))
 }
 
 /// Gauss–Newton with backtracking over the shared parameters, then the jackknife.
