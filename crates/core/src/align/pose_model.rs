@@ -753,36 +753,36 @@ fn lead_search(
     // basin better than the near fit, the fit is made again on the referee's windows from there
     // and kept where it stays by the minimum.
     let at = |offset_s: f64| pose_fit::residuals_at(data, &kept, offset_s);
-    let worse = |fit: &PoseFit, m: &pose_fit::ScanMinimum| {
-        paired_t(&at(fit.theta[0]), &at(m.offset_s)) >= LEAD_SIGNIFICANCE_T
+    let judged = |fit: PoseFit, from| LeadFit {
+        residuals: at(fit.theta[0]),
+        fit,
+        from,
+    };
+    let worse = |f: &LeadFit, m: &pose_fit::ScanMinimum| {
+        paired_t(&f.residuals, &at(m.offset_s)) >= LEAD_SIGNIFICANCE_T
     };
     let again = |m: &pose_fit::ScanMinimum| {
         fit_on(data, &kept, m.offset_s, m.lever_m)
             .filter(|f| (f.theta[0] - m.offset_s).abs() <= SAME_BASIN_S)
+            .map(|f| judged(f, Some(*m)))
     };
-    let mut fits: Vec<(PoseFit, Option<pose_fit::ScanMinimum>)> = fits
+    let mut fits: Vec<LeadFit> = fits
         .into_iter()
-        .map(|(f, from)| match from {
-            Some(m) if worse(&f, &m) => (again(&m).unwrap_or(f), from),
-            _ => (f, from),
+        .map(|(f, from)| {
+            let f = judged(f, from);
+            match from {
+                Some(m) if worse(&f, &m) => again(&m).unwrap_or(f),
+                _ => f,
+            }
         })
         .collect();
-    if let Some(n) = near {
-        let by_near = minima
+    let near_minimum = fits.iter().find(|f| f.from.is_none()).and_then(|n| {
+        minima
             .iter()
-            .find(|m| (n.theta[0] - m.offset_s).abs() <= SAME_BASIN_S);
-        if let Some(m) = by_near.filter(|m| worse(n, m)) {
-            fits.extend(again(m).map(|f| (f, Some(*m))));
-        }
-    }
-    let fits: Vec<LeadFit> = fits
-        .into_iter()
-        .map(|(fit, from)| LeadFit {
-            residuals: pose_fit::residuals_at(data, &kept, fit.theta[0]),
-            fit,
-            from,
-        })
-        .collect();
+            .find(|m| (n.fit.theta[0] - m.offset_s).abs() <= SAME_BASIN_S)
+            .filter(|m| worse(n, m))
+    });
+    fits.extend(near_minimum.and_then(again));
     Some(Lead {
         windows: kept,
         fits,
