@@ -553,7 +553,8 @@ impl OffsetSearch<'_> {
     }
 
     /// No search was confident enough to be applied (`weak`, the best answer): the pose fit started
-    /// from each search's answer (on near-straight paths the speed search was within a few
+    /// from each search's answer and from points between answers beyond its reach of each other
+    /// ([`rescue_starts`]; on near-straight paths the speed search was within a few
     /// milliseconds where its peak was too flat to be confident, and the curvature searches there
     /// are noise; on walking robots a confident speed search matched at a wrong lag contradicts
     /// signed curvature's lead). A fit counts when it converged with its lever (its σ has its
@@ -571,41 +572,32 @@ impl OffsetSearch<'_> {
         searched: &Searched,
     ) -> Option<(TimeOffsetReport, Vec<Warning>)> {
         use crate::align::pose_model::MAX_DISAGREEMENT_S;
-        let mut starts: Vec<(OffsetMethod, f64)> = Vec::new();
-        for m in &searched.methods {
-            match m.offset_s {
-                Some(offset_s)
-                    if m.status != MethodStatus::Failed
-                        && offset_s.is_finite()
-                        && !starts
-                            .iter()
-                            .any(|(_, s)| (s - offset_s).abs() <= MAX_DISAGREEMENT_S) =>
-                {
-                    starts.push((m.method, offset_s))
-                }
-                _ => {}
-            }
-        }
-        let (method, offset_s, posed) = starts
+        let answers: Vec<(OffsetMethod, f64)> = searched
+            .methods
+            .iter()
+            .filter(|m| m.status != MethodStatus::Failed)
+            .filter_map(|m| Some((m.method, m.offset_s.filter(|o| o.is_finite())?)))
+            .collect();
+        let (start, offset_s, posed) = rescue_starts(&answers)
             .into_iter()
-            .filter_map(|(method, offset_s)| {
-                let start = OffsetEstimate {
-                    method,
+            .filter_map(|(start, offset_s)| {
+                let estimate = OffsetEstimate {
+                    method: start.method(),
                     offset_s,
                     status: OffsetStatus::Ok,
                     ..*weak
                 };
-                let posed = self.pose_refined(&start, &searched.methods, Starts::AnswerOnly)?;
+                let posed = self.pose_refined(&estimate, &searched.methods, Starts::AnswerOnly)?;
                 let near = (posed.report.offset_s - offset_s).abs() <= MAX_DISAGREEMENT_S;
                 let told = pins_offset(posed.report.fitted_forward_separable, posed.report.sigma_s);
                 (posed.report.sigma_parts.is_some() && told && (near || posed.lead_moved))
-                    .then_some((method, offset_s, posed))
+                    .then_some((start, offset_s, posed))
             })
             .min_by(|a, b| a.2.mse_m2.total_cmp(&b.2.mse_m2))?;
         let mut methods = searched.methods.clone();
         methods.push(posed.entry);
         let reason = format!(
-            "{}; but the pose fit started from {method}'s answer ({offset_s:+.3} s) converged with its lever and fits the windows best of the searches' answers: {}",
+            "{}; but the pose fit started from {start} ({offset_s:+.3} s) converged with its lever and fits the windows best of the starts tried: {}",
             searched.reason, posed.note
         );
         let report = applied_report(
@@ -821,6 +813,86 @@ const RESCUE_SIGMA_S: f64 = 0.05;
 /// ```
 fn pins_offset(separable: Option<bool>, sigma_s: Option<f64>) -> bool {
     separable == Some(true) || sigma_s.is_some_and(|s| s <= RESCUE_SIGMA_S)
+}
+
+/// Where a rescue's pose fit starts: a search's answer, or a point between two answers that lie
+/// beyond the fit's reach of each other.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum RescueStart {
+    /// The answer of this search.
+    Answer(OffsetMethod),
+    /// A point between the answers of these two searches.
+    Between(OffsetMethod, OffsetMethod),
+}
+
+impl RescueStart {
+    /// The search the start is counted to (the lead search leaves its answer out of the others).
+    fn method(self) -> OffsetMethod {
+        match self {
+            RescueStart::Answer(m) | RescueStart::Between(m, _) => m,
+        }
+    }
+}
+
+impl std::fmt::Display for RescueStart {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RescueStart::Answer(m) => write!(f, "{m}'s answer"),
+            RescueStart::Between(a, b) => write!(f, "between {a}'s and {b}'s answers"),
+        }
+    }
+}
+
+/// The most points a rescue starts from between two searches' answers: answers up to
+/// 2 × ([`RESCUE_FILL_STARTS`] + 1) × [`MAX_DISAGREEMENT_S`] (2.4 s) apart are bridged; farther
+/// apart, one is a lever read as a lead or a profile matched at a wrong lag, and the truth lies
+/// near one of them.
+///
+/// [`MAX_DISAGREEMENT_S`]: crate::align::pose_model::MAX_DISAGREEMENT_S
+const RESCUE_FILL_STARTS: usize = 3;
+
+/// Where a weak search's rescue starts the pose fit, from the searches' `answers` (method, Δt):
+/// each answer not within [`MAX_DISAGREEMENT_S`] of an earlier one, and, between two neighbouring
+/// starts farther apart than twice that (and at most [`RESCUE_FILL_STARTS`] + 1 times farther),
+/// points evenly spaced so that every Δt between them lies within the fit's reach of a start. Two
+/// weak searches may both miss by more than the reach on either side (a vehicle on a 20 Hz
+/// reference with GNSS outages: speed −0.382 s, curvature +0.317 s, the truth −0.015 s);
+/// the fits from every start are then judged by their residual.
+///
+/// ```text
+/// speed −0.382, signed curvature +0.318, curvature +0.317
+///   → speed's answer −0.382, signed curvature's +0.318, between the two −0.032
+/// speed 0.0, curvature 5.0 → the two answers only (too far apart to bridge)
+/// ```
+///
+/// [`MAX_DISAGREEMENT_S`]: crate::align::pose_model::MAX_DISAGREEMENT_S
+fn rescue_starts(answers: &[(OffsetMethod, f64)]) -> Vec<(RescueStart, f64)> {
+    use crate::align::pose_model::MAX_DISAGREEMENT_S;
+    let mut starts: Vec<(RescueStart, f64)> = Vec::new();
+    for &(method, offset_s) in answers {
+        if !starts
+            .iter()
+            .any(|(_, s)| (s - offset_s).abs() <= MAX_DISAGREEMENT_S)
+        {
+            starts.push((RescueStart::Answer(method), offset_s));
+        }
+    }
+    let mut sorted = starts.clone();
+    sorted.sort_by(|a, b| a.1.total_cmp(&b.1));
+    for pair in sorted.windows(2) {
+        let ((RescueStart::Answer(a), lo_s), (RescueStart::Answer(b), hi_s)) = (pair[0], pair[1])
+        else {
+            continue;
+        };
+        let pieces = ((hi_s - lo_s) / (2.0 * MAX_DISAGREEMENT_S)).ceil() as usize;
+        if (2..=RESCUE_FILL_STARTS + 1).contains(&pieces) {
+            let step_s = (hi_s - lo_s) / pieces as f64;
+            starts.extend(
+                (1..pieces).map(|k| (RescueStart::Between(a, b), lo_s + k as f64 * step_s)),
+            );
+        }
+    }
+    starts
 }
 
 /// Where the pose fit may start.
@@ -1172,7 +1244,7 @@ fn model_report(
 
 #[cfg(test)]
 mod rescue_tests {
-    use super::pins_offset;
+    use super::{pins_offset, rescue_starts, RescueStart};
 
     #[test]
     fn an_inseparable_fit_rescues_only_under_a_narrow_sigma() {
@@ -1181,5 +1253,29 @@ mod rescue_tests {
         assert!(!pins_offset(Some(false), Some(0.2)));
         assert!(!pins_offset(Some(false), None));
         assert!(!pins_offset(None, Some(f64::NAN)));
+    }
+
+    #[test]
+    fn a_rescue_starts_between_answers_beyond_the_fits_reach() {
+        use super::OffsetMethod::{Curvature, SignedCurvature, Speed};
+        let starts = rescue_starts(&[
+            (Speed, -0.382),
+            (SignedCurvature, 0.3178),
+            (Curvature, 0.317),
+        ]);
+        assert_eq!(starts.len(), 3);
+        assert_eq!(starts[0], (RescueStart::Answer(Speed), -0.382));
+        assert_eq!(starts[1], (RescueStart::Answer(SignedCurvature), 0.3178));
+        assert_eq!(starts[2].0, RescueStart::Between(Speed, SignedCurvature));
+        assert!((starts[2].1 - -0.0321).abs() < 1e-12);
+        // Within twice the reach: the answers cover every Δt between them.
+        assert_eq!(rescue_starts(&[(Speed, 0.0), (Curvature, 0.55)]).len(), 2);
+        // 1.5 s apart: two points between, every Δt within 0.3 s of a start.
+        let bridged = rescue_starts(&[(Curvature, 1.0), (Speed, -0.5)]);
+        let between: Vec<f64> = bridged[2..].iter().map(|s| s.1).collect();
+        assert_eq!(between.len(), 2);
+        assert!((between[0] - 0.0).abs() < 1e-12 && (between[1] - 0.5).abs() < 1e-12);
+        // Too far apart to bridge: the answers only.
+        assert_eq!(rescue_starts(&[(Speed, 0.0), (Curvature, 5.0)]).len(), 2);
     }
 }
