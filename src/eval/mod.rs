@@ -454,7 +454,7 @@ fn searched_offset(
         Some(Err(e @ Error::NoOverlap { .. })) => return Err(clone_no_overlap(e, &est.label)),
         Some(Ok(o)) => match auto
             .is_some()
-            .then(|| search.pose_rescued(&o, &searched))
+            .then(|| search.pose_rescued(&o, &searched, Rescue::Weak))
             .flatten()
         {
             Some(rescued) => rescued,
@@ -491,37 +491,47 @@ struct OffsetSearch<'a> {
 
 impl OffsetSearch<'_> {
     /// A confident answer: its clock model over time (refined by the pose fit under `auto` when the
-    /// estimate has orientations), applied.
+    /// estimate has orientations), applied. Where the pose fit could be made neither from it nor
+    /// from another confident search's answer, the weak searches' answers and the points between
+    /// answers may start it ([`Self::pose_rescued`]: a speed search matched a walking robot's
+    /// smooth speed 4.5 s from the truth, and the fit from there did not converge).
     fn accepted_offset(
         &self,
         o: &OffsetEstimate,
         searched: Searched,
     ) -> (TimeOffsetReport, Vec<Warning>) {
+        let Some(posed) = self.pose_refined(o, &searched.methods, Starts::AnswerThenOthers) else {
+            if let Some(rescued) = self.pose_rescued(o, &searched, Rescue::ConfidentUnfitted) {
+                return rescued;
+            }
+            let (report, w) = self.over_time(o);
+            let Searched {
+                methods,
+                reason,
+                implied_lever,
+            } = searched;
+            return (
+                applied_report(report, o.method, o, methods, reason, implied_lever),
+                w,
+            );
+        };
         let Searched {
             mut methods,
             reason,
             implied_lever,
         } = searched;
-        let posed = self.pose_refined(o, &methods, Starts::AnswerThenOthers);
-        let (report, w, method, reason) = match posed {
-            Some(Posed {
-                report,
-                warnings: w,
-                note,
-                entry,
-                ..
-            }) => {
-                methods.push(entry);
-                (report, w, OffsetMethod::Pose, format!("{reason}; {note}"))
-            }
-            None => {
-                let (report, w) = self.over_time(o);
-                (report, w, o.method, reason)
-            }
-        };
+        methods.push(posed.entry);
+        let reason = format!("{reason}; {}", posed.note);
         (
-            applied_report(report, method, o, methods, reason, implied_lever),
-            w,
+            applied_report(
+                posed.report,
+                OffsetMethod::Pose,
+                o,
+                methods,
+                reason,
+                implied_lever,
+            ),
+            posed.warnings,
         )
     }
 
@@ -552,7 +562,9 @@ impl OffsetSearch<'_> {
         attempt(JACOBIAN_PERIODS).or_else(|| attempt(NARROW_JACOBIAN_PERIODS))
     }
 
-    /// No search was confident enough to be applied (`weak`, the best answer): the pose fit started
+    /// No search was confident enough to be applied (`weak`, the best answer), or one was but the
+    /// pose fit could be made neither from its answer nor from another confident search's
+    /// (`rescue`; those are not tried again): the pose fit started
     /// from each search's answer and from points between answers beyond its reach of each other
     /// ([`rescue_starts`]; on near-straight paths the speed search was within a few
     /// milliseconds where its peak was too flat to be confident, and the curvature searches there
@@ -570,16 +582,30 @@ impl OffsetSearch<'_> {
         &self,
         weak: &OffsetEstimate,
         searched: &Searched,
+        rescue: Rescue,
     ) -> Option<(TimeOffsetReport, Vec<Warning>)> {
         use crate::align::pose_model::MAX_DISAGREEMENT_S;
+        if !self.config.pose_fit() {
+            return None;
+        }
         let answers: Vec<(OffsetMethod, f64)> = searched
             .methods
             .iter()
             .filter(|m| m.status != MethodStatus::Failed)
             .filter_map(|m| Some((m.method, m.offset_s.filter(|o| o.is_finite())?)))
             .collect();
+        // The confident searches' answers were tried already where the confident answer could not
+        // start the fit (`Starts::AnswerThenOthers`).
+        let tried = |start: &RescueStart| match (rescue, start) {
+            (Rescue::ConfidentUnfitted, RescueStart::Answer(m)) => searched
+                .methods
+                .iter()
+                .any(|r| r.method == *m && r.status == MethodStatus::Ok),
+            _ => false,
+        };
         let (start, offset_s, posed) = rescue_starts(&answers)
             .into_iter()
+            .filter(|(start, _)| !tried(start))
             .filter_map(|(start, offset_s)| {
                 let estimate = OffsetEstimate {
                     method: start.method(),
@@ -596,8 +622,14 @@ impl OffsetSearch<'_> {
             .min_by(|a, b| a.2.mse_m2.total_cmp(&b.2.mse_m2))?;
         let mut methods = searched.methods.clone();
         methods.push(posed.entry);
+        let fit = match rescue {
+            Rescue::Weak => "the pose fit",
+            Rescue::ConfidentUnfitted => {
+                "the pose fit could be made neither from that answer nor from another confident search's, and the one"
+            }
+        };
         let reason = format!(
-            "{}; but the pose fit started from {start} ({offset_s:+.3} s) converged with its lever and fits the windows best of the starts tried: {}",
+            "{}; but {fit} started from {start} ({offset_s:+.3} s) converged with its lever and fits the windows best of the starts tried: {}",
             searched.reason, posed.note
         );
         let report = applied_report(
@@ -893,6 +925,16 @@ fn rescue_starts(answers: &[(OffsetMethod, f64)]) -> Vec<(RescueStart, f64)> {
         }
     }
     starts
+}
+
+/// Why a rescue's pose fit is started from the searches' answers ([`OffsetSearch::pose_rescued`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Rescue {
+    /// No search was confident.
+    Weak,
+    /// A search was confident, but the fit could be made neither from its answer nor from another
+    /// confident search's (those are not tried again).
+    ConfidentUnfitted,
 }
 
 /// Where the pose fit may start.
