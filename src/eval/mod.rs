@@ -562,7 +562,7 @@ impl OffsetSearch<'_> {
         attempt(JACOBIAN_PERIODS).or_else(|| attempt(NARROW_JACOBIAN_PERIODS))
     }
 
-    /// No search was confident enough to be applied (`weak`, the best answer), or one was but the
+    /// No search was confident enough to be applied (`answer`, the best), or one was (`answer`) but the
     /// pose fit could be made neither from its answer nor from another confident search's
     /// (`rescue`; those are not tried again): the pose fit started
     /// from each search's answer and from points between answers beyond its reach of each other
@@ -580,7 +580,7 @@ impl OffsetSearch<'_> {
     /// [`MAX_DISAGREEMENT_S`]: crate::align::pose_model::MAX_DISAGREEMENT_S
     fn pose_rescued(
         &self,
-        weak: &OffsetEstimate,
+        answer: &OffsetEstimate,
         searched: &Searched,
         rescue: Rescue,
     ) -> Option<(TimeOffsetReport, Vec<Warning>)> {
@@ -611,7 +611,7 @@ impl OffsetSearch<'_> {
                     method: start.method(),
                     offset_s,
                     status: OffsetStatus::Ok,
-                    ..*weak
+                    ..*answer
                 };
                 let posed = self.pose_refined(&estimate, &searched.methods, Starts::AnswerOnly)?;
                 let near = (posed.report.offset_s - offset_s).abs() <= MAX_DISAGREEMENT_S;
@@ -635,7 +635,7 @@ impl OffsetSearch<'_> {
         let report = applied_report(
             posed.report,
             OffsetMethod::Pose,
-            weak,
+            answer,
             methods,
             reason,
             searched.implied_lever,
@@ -900,22 +900,22 @@ const RESCUE_FILL_STARTS: usize = 3;
 /// [`MAX_DISAGREEMENT_S`]: crate::align::pose_model::MAX_DISAGREEMENT_S
 fn rescue_starts(answers: &[(OffsetMethod, f64)]) -> Vec<(RescueStart, f64)> {
     use crate::align::pose_model::MAX_DISAGREEMENT_S;
-    let mut starts: Vec<(RescueStart, f64)> = Vec::new();
+    let mut kept: Vec<(OffsetMethod, f64)> = Vec::new();
     for &(method, offset_s) in answers {
-        if !starts
+        if !kept
             .iter()
             .any(|(_, s)| (s - offset_s).abs() <= MAX_DISAGREEMENT_S)
         {
-            starts.push((RescueStart::Answer(method), offset_s));
+            kept.push((method, offset_s));
         }
     }
-    let mut sorted = starts.clone();
-    sorted.sort_by(|a, b| a.1.total_cmp(&b.1));
-    for pair in sorted.windows(2) {
-        let ((RescueStart::Answer(a), lo_s), (RescueStart::Answer(b), hi_s)) = (pair[0], pair[1])
-        else {
-            continue;
-        };
+    let mut starts: Vec<(RescueStart, f64)> = kept
+        .iter()
+        .map(|&(m, offset_s)| (RescueStart::Answer(m), offset_s))
+        .collect();
+    kept.sort_by(|a, b| a.1.total_cmp(&b.1));
+    for pair in kept.windows(2) {
+        let ((a, lo_s), (b, hi_s)) = (pair[0], pair[1]);
         let pieces = ((hi_s - lo_s) / (2.0 * MAX_DISAGREEMENT_S)).ceil() as usize;
         if (2..=RESCUE_FILL_STARTS + 1).contains(&pieces) {
             let step_s = (hi_s - lo_s) / pieces as f64;
