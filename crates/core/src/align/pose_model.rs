@@ -20,7 +20,9 @@
 //!    from the mission's windows twice: the jackknife over the windows of that fit (D free; at
 //!    least its formal σ, see [`crate::align::pose_fit`]), and the profile's windows for the same
 //!    parameter (their calibrated σ combined and raised by their scatter about it, D held; the
-//!    signal searches' 2 ms floor is not theirs). The windows hold D, so they cannot see what
+//!    signal searches' 2 ms floor is not theirs; where fewer of them converged than the fit has
+//!    windows, k of n, times √(k/n): k windows combined are the error bar of a k-window answer,
+//!    [`windows_share`]). The windows hold D, so they cannot see what
 //!    D's freedom adds to the offset's error (a forward lever fitted a few centimetres off moves
 //!    every window alike); that share of the formal σ ([`pose_fit::PoseFit::lever_share_s`]) joins
 //!    their part in quadrature (on the second simulator's 960 seen missions, scaled to equal
@@ -201,8 +203,9 @@ pub struct SigmaParts {
     /// The final fit's formal σ (what white residuals would give; 0 when it could not be formed).
     pub formal_s: f64,
     /// The profile's windows for the same parameter, the lever held (their calibrated σ combined
-    /// and raised by their scatter about it); `None` without a window inside an offset's span, or
-    /// fewer than two for the line.
+    /// and raised by their scatter about it; when pooled, times √([`windows_share`]) where the
+    /// profile kept fewer windows than the fit has); `None` without a window inside an offset's
+    /// span, or fewer than two for the line.
     pub windows_s: Option<f64>,
     /// The part of the fit's formal σ that the lever's freedom adds ([`PoseFit::lever_share_s`]),
     /// which the windows, the lever held, cannot see: added to their part in quadrature before
@@ -1145,7 +1148,8 @@ pub fn steps_resolved(fit: &PoseFit) -> bool {
 /// Step 4: `model`'s parameters and their σ from its fit `last` (σ at least
 /// [`POSE_SIGMA_FLOOR_S`]). An offset's σ (the constant's, each segment's) pools the fit's
 /// jackknife with what the profile's windows give for it (their calibrated σ combined and raised by
-/// their scatter, with the share of σ the fitted lever adds, which they hold): the mean of the two
+/// their scatter, scaled to the fit's windows by [`windows_share`], with the share of σ the fitted
+/// lever adds, which they hold): the mean of the two
 /// variances, at least the formal σ. The line's σ are the
 /// fit's, at least the windows' (see the module doc). The constant's σ also adds a drift the
 /// profile measures beyond [`HIDDEN_DRIFT_Z`] of its σ, and `valley_s` (the lead search's: half
@@ -1180,6 +1184,14 @@ fn set_parameters(
         match windows_s {
             Some(w) if jackknife > 0.0 && windows_inside(profile, span) >= MIN_POOLED_WINDOWS => {
                 let lever_s = last.lever_share_s(k);
+                // k windows combined estimate a k-window answer's error; the fit's is over n.
+                let fitted = last
+                    .windows
+                    .iter()
+                    .filter(|x| (span.0..=span.1).contains(&x.t()))
+                    .count();
+                let w = w * windows_share(windows_inside(profile, span), fitted).sqrt();
+                let windows_s = Some(w);
                 let windows_var = w * w + lever_s * lever_s;
                 let s = ((jackknife * jackknife + windows_var) / 2.0)
                     .sqrt()
@@ -1257,6 +1269,29 @@ fn set_parameters(
             let k = model.headline_from_longest_segment()?;
             each.into_iter().nth(k)
         }
+    }
+}
+
+/// The share of the final fit's `fitted` windows that the profile's `inside` windows make (at
+/// most 1; 1 where the fit's windows are not known). The profile's windows combined estimate the
+/// error of an answer over those windows alone; the fit's answer is over all of its windows, each
+/// about as informative (the same length, the same data), so its error is the windows' σ times
+/// √(share). Where the profile keeps every window the share is 1 and nothing changes; where few of
+/// them converged (a walking robot's profile measured on the narrow Jacobian: 3 of 30), the
+/// windows' combined σ would otherwise be an error bar for a 3-window answer.
+///
+/// ```
+/// # use trajdrift_core::align::pose_model::windows_share;
+/// assert_eq!(windows_share(30, 30), 1.0);
+/// assert_eq!(windows_share(3, 30), 0.1);
+/// assert_eq!(windows_share(5, 4), 1.0); // a profile window straddling two of the fit's
+/// assert_eq!(windows_share(5, 0), 1.0); // the fit's windows unknown
+/// ```
+pub fn windows_share(inside: usize, fitted: usize) -> f64 {
+    if fitted > inside {
+        inside as f64 / fitted as f64
+    } else {
+        1.0
     }
 }
 
@@ -1470,6 +1505,34 @@ mod tests {
         // One segment: nothing to resolve.
         let one = fit(ClockShape::Constant, vec![0.2], vec![0.01]);
         assert!(steps_resolved(&one));
+    }
+
+    #[test]
+    fn a_profile_of_few_of_the_fits_windows_speaks_for_all_of_them() {
+        let p = profile(|_| 0.1);
+        let ms = |v: f64| v * 1e-3;
+        let over = |n: usize| {
+            let mut f = fit(ClockShape::Constant, vec![0.1], vec![ms(0.3)]);
+            f.windows = (0..n)
+                .map(|k| pose_fit::Window {
+                    range: 0..0,
+                    t_start: 20.0 * k as f64,
+                    t_end: 20.0 * (k + 1) as f64,
+                })
+                .collect();
+            f
+        };
+        // The fit over the profile's four windows of 20 s: they combine to 1 ms, as before.
+        let mut m = ClockModel::constant(0.0, 0.0, String::new());
+        let parts = set_parameters(&mut m, &over(4), &p, 0.0, 0.0).unwrap();
+        assert!(close(parts.windows_s.unwrap(), ms(1.0)), "{parts:?}");
+        // The fit over sixteen such windows, of which the profile kept four: their 1 ms is the
+        // error of a four-window answer, the fit's over sixteen is √(4/16) of it; pooled with the
+        // jackknife, √((0.3² + 0.5²)/2) ms.
+        let mut m = ClockModel::constant(0.0, 0.0, String::new());
+        let parts = set_parameters(&mut m, &over(16), &p, 0.0, 0.0).unwrap();
+        assert!(close(parts.windows_s.unwrap(), ms(0.5)), "{parts:?}");
+        assert!(close(m.sigma_s, ms(0.17f64.sqrt())), "{m:?}");
     }
 
     #[test]
