@@ -97,3 +97,16 @@ def test_a_confident_answer_the_pose_fit_cannot_start_from_is_not_the_last_word(
     error_s, what = applied_pose_error(o, info)
     assert o["status"] == "ok", what
     assert abs(error_s) <= 0.01 and abs(error_s) <= 2 * o["sigma_s"] <= 0.05, what
+
+
+def test_a_profile_of_few_windows_does_not_widen_the_fits_sigma(tmp_path):
+    # A walking robot on a 2 Hz reference (20 Hz estimate, 17 mm of noise, a 615 s mission) whose
+    # lead search moved the fit +0.974 s: the profile measured from there kept 3 windows of about
+    # 30, each with σ 111–164 ms, and σ pooled their combined 80 ms with the fit's jackknife of
+    # 1.8 ms: 56 ms for an answer 3.1 ms off. Three windows combined are the error bar of a
+    # three-window answer; scaled to the fit's windows (`windows_share` in `align::pose_model`,
+    # its unit test) σ is 18 ms.
+    o, info = time_offset(tmp_path, "legged", 103105)
+    error_s, what = applied_pose_error(o, info)
+    assert o["status"] == "ok", what
+    assert abs(error_s) <= 0.01 and abs(error_s) <= 2 * o["sigma_s"] <= 0.05, what
