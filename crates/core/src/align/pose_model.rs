@@ -43,9 +43,11 @@
 //!    ([`TILINGS`], `over_tilings`): where the cuts fall chooses part of each window's slow errors,
 //!    and on 1–2 Hz references that part moved Δt by 10–30 ms from one tiling to the next. The
 //!    offset's σ loses, in quadrature, what the mean removes of the tilings' spread, at least the
-//!    formal σ (`sigma_parts.cuts_s`; docs/evidence.md, "The windows' cuts, averaged"). Not where
-//!    the fit's σ is below [`TILINGS_FROM_SIGMA_S`]: there the mean moves Δt by less, and costs
-//!    a long mission's evaluation half its time again.
+//!    formal σ (`sigma_parts.cuts_s`; docs/evidence.md, "The windows' cuts, averaged"), where
+//!    that removal is resolved from σ: what remains exceeds the removal's own noise (a spread
+//!    from four fits is a variance from three degrees of freedom; [`Cuts::resolved_against`]).
+//!    Not where the fit's σ is below [`TILINGS_FROM_SIGMA_S`]: there the mean moves Δt by less,
+//!    and costs a long mission's evaluation half its time again.
 //!
 //! **The lead search.** The signal searches read a sensor ahead of the other as a clock offset of
 //! lever/speed (at a walk, a 0.3 m lever is a second), and the fit from there stays in the long
@@ -225,7 +227,8 @@ pub struct SigmaParts {
     pub basins_s: f64,
     /// The part of one tiling's σ that the mean over [`TILINGS`] tilings of the windows removes
     /// (their Δt's spread, see `over_tilings`), taken away in quadrature, never below the formal σ
-    /// (0 otherwise: not a constant, or one tiling).
+    /// (0 otherwise: not a constant, one tiling, or a spread not resolved from σ,
+    /// [`Cuts::resolved_against`]).
     #[serde(default)]
     pub cuts_s: f64,
     pub combined: SigmaCombination,
@@ -376,15 +379,15 @@ pub fn pose_clock_model(
     };
     let (profile, mut model) = (chosen.profile, chosen.model);
     let last = mission.resolved(&mut model, last);
-    let (last, cuts_s) = match model.model {
+    let (last, cuts) = match model.model {
         OffsetModel::Constant => over_tilings(mission.data, last),
-        _ => (last, 0.0),
+        _ => (last, Cuts::NONE),
     };
     let valley_s = match (&lead, model.model) {
         (Some(lead), OffsetModel::Constant) => lead.valley_s(&data, &last),
         _ => 0.0,
     };
-    let sigma_parts = set_parameters(&mut model, &last, &profile, valley_s, cuts_s);
+    let sigma_parts = set_parameters(&mut model, &last, &profile, valley_s, cuts);
     model.describe();
     // θ₀'s σ as reported: the headline's, or the first segment's.
     let first_sigma_s = match model.model {
@@ -1092,9 +1095,9 @@ impl Mission<'_, '_> {
 /// keeps 1/n of the latter, so the constant's σ (one tiling's) loses s²·(1 − 1/n) in quadrature,
 /// never below the formal σ (`set_parameters`). Measured in docs/evidence.md ("The windows' cuts,
 /// averaged").
-fn over_tilings(data: &PoseData<'_>, last: PoseFit) -> (PoseFit, f64) {
+fn over_tilings(data: &PoseData<'_>, last: PoseFit) -> (PoseFit, Cuts) {
     if last.theta_sigma[0] < TILINGS_FROM_SIGMA_S {
-        return (last, 0.0);
+        return (last, Cuts::NONE);
     }
     let reach_s = TILING_REACH_SIGMA * last.theta_sigma[0].max(POSE_SIGMA_FLOOR_S);
     let with_lever = last.lever_sigma_m.is_some();
@@ -1118,7 +1121,7 @@ fn over_tilings(data: &PoseData<'_>, last: PoseFit) -> (PoseFit, f64) {
     let mut mean = last;
     mean.theta[0] = fits.iter().map(|f| f.0).sum::<f64>() / n;
     mean.lever_m = fits.iter().map(|f| f.1).sum::<Vector3<f64>>() / n;
-    let cuts_s = if fits.len() > 1 {
+    let removed_s = if fits.len() > 1 {
         let var = fits
             .iter()
             .map(|f| (f.0 - mean.theta[0]).powi(2))
@@ -1128,7 +1131,49 @@ fn over_tilings(data: &PoseData<'_>, last: PoseFit) -> (PoseFit, f64) {
     } else {
         0.0
     };
-    (mean, cuts_s)
+    let tilings = fits.len();
+    (mean, Cuts { removed_s, tilings })
+}
+
+/// What the mean over tilings removes from one tiling's σ (`over_tilings`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cuts {
+    /// s·√(1 − 1/n), s the standard deviation of the n tilings' Δt, seconds.
+    pub removed_s: f64,
+    /// n: the tilings whose fits joined the mean.
+    pub tilings: usize,
+}
+
+impl Cuts {
+    /// One tiling: nothing removed.
+    pub const NONE: Cuts = Cuts {
+        removed_s: 0.0,
+        tilings: 1,
+    };
+
+    /// Whether the removal is resolved against `sigma_s`, the σ of one tiling's Δt: what would
+    /// remain of its variance exceeds the removal's own noise (one standard deviation of a
+    /// variance from n − 1 degrees of freedom, √(2/(n − 1)) of it; with four tilings, a removal
+    /// up to 0.74 of σ). Beyond that the tilings' spread is as large as σ itself, which says
+    /// rather that σ came out small than that the mean is nearly exact: where it was taken anyway,
+    /// 2σ covered 88 % (docs/evidence.md, "The tilings' spread, resolved or not").
+    ///
+    /// ```
+    /// # use trajdrift_core::align::pose_model::Cuts;
+    /// let cuts = |removed_s: f64| Cuts { removed_s, tilings: 4 };
+    /// assert!(cuts(0.7).resolved_against(1.0));
+    /// assert!(!cuts(0.75).resolved_against(1.0));
+    /// assert!(!cuts(1.2).resolved_against(1.0));
+    /// assert!(!Cuts::NONE.resolved_against(1.0));
+    /// ```
+    pub fn resolved_against(&self, sigma_s: f64) -> bool {
+        if self.tilings < 2 || self.removed_s <= 0.0 {
+            return false;
+        }
+        let removed2 = self.removed_s * self.removed_s;
+        let noise = (2.0 / (self.tilings - 1) as f64).sqrt() * removed2;
+        sigma_s * sigma_s - removed2 > noise
+    }
 }
 
 /// Whether a piecewise fit tells some two neighbouring segments apart: their offsets differ by more
@@ -1160,7 +1205,7 @@ fn set_parameters(
     last: &PoseFit,
     profile: &OffsetProfile,
     valley_s: f64,
-    cuts_s: f64,
+    cuts: Cuts,
 ) -> Option<SigmaParts> {
     let sigma = |k: usize, floor_s: Option<f64>| {
         let s = last.theta_sigma[k].max(POSE_SIGMA_FLOOR_S);
@@ -1221,7 +1266,13 @@ fn set_parameters(
                 _ => 0.0,
             };
             let (sigma_s, parts) = offset_sigma(0, (f64::NEG_INFINITY, f64::INFINITY));
-            // The mean over tilings keeps less of what the cuts choose (`over_tilings`).
+            // The mean over tilings keeps less of what the cuts choose (`over_tilings`), where
+            // the tilings' spread is resolved from σ (`Cuts::resolved_against`).
+            let cuts_s = if cuts.resolved_against(sigma_s) {
+                cuts.removed_s
+            } else {
+                0.0
+            };
             let sigma_s = (sigma_s * sigma_s - cuts_s * cuts_s)
                 .max(0.0)
                 .sqrt()
@@ -1524,13 +1575,13 @@ mod tests {
         };
         // The fit over the profile's four windows of 20 s: they combine to 1 ms, as before.
         let mut m = ClockModel::constant(0.0, 0.0, String::new());
-        let parts = set_parameters(&mut m, &over(4), &p, 0.0, 0.0).unwrap();
+        let parts = set_parameters(&mut m, &over(4), &p, 0.0, Cuts::NONE).unwrap();
         assert!(close(parts.windows_s.unwrap(), ms(1.0)), "{parts:?}");
         // The fit over sixteen such windows, of which the profile kept four: their 1 ms is the
         // error of a four-window answer, the fit's over sixteen is √(4/16) of it; pooled with the
         // jackknife, √((0.3² + 0.5²)/2) ms.
         let mut m = ClockModel::constant(0.0, 0.0, String::new());
-        let parts = set_parameters(&mut m, &over(16), &p, 0.0, 0.0).unwrap();
+        let parts = set_parameters(&mut m, &over(16), &p, 0.0, Cuts::NONE).unwrap();
         assert!(close(parts.windows_s.unwrap(), ms(0.5)), "{parts:?}");
         assert!(close(m.sigma_s, ms(0.17f64.sqrt())), "{m:?}");
     }
@@ -1548,7 +1599,7 @@ mod tests {
             &fit(ClockShape::Constant, vec![0.1], vec![ms(0.3)]),
             &p,
             0.0,
-            0.0,
+            Cuts::NONE,
         );
         assert!(
             close(m.offset_s, 0.1) && close(m.sigma_s, ms(0.545f64.sqrt())),
@@ -1561,7 +1612,7 @@ mod tests {
             &fit(ClockShape::Constant, vec![0.1], vec![ms(5.0)]),
             &p,
             0.0,
-            0.0,
+            Cuts::NONE,
         );
         assert!(close(m.sigma_s, ms(13f64.sqrt())), "{m:?}");
         // The formal σ stays the floor.
@@ -1569,8 +1620,8 @@ mod tests {
         sure.theta_jackknife_sigma = vec![ms(0.3)];
         sure.theta_formal_sigma = vec![ms(2.0)];
         let mut m = constant();
-        let parts =
-            set_parameters(&mut m, &sure, &p, 0.0, 0.0).expect("a constant's σ has its parts");
+        let parts = set_parameters(&mut m, &sure, &p, 0.0, Cuts::NONE)
+            .expect("a constant's σ has its parts");
         assert!(close(m.sigma_s, ms(2.0)), "{m:?}");
         // The report's `sigma_parts` say so.
         assert_eq!(parts.combined, SigmaCombination::Pooled);
@@ -1582,24 +1633,37 @@ mod tests {
         raised.theta_jackknife_sigma = vec![ms(0.3)];
         raised.theta_formal_sigma = vec![ms(0.5)];
         let mut m = constant();
-        set_parameters(&mut m, &raised, &p, 0.0, 0.0);
+        set_parameters(&mut m, &raised, &p, 0.0, Cuts::NONE);
         assert!(close(m.sigma_s, ms(0.545f64.sqrt())), "{m:?}");
         // The mean over tilings removes the cuts' part in quadrature (√(0.545 − 0.2²) ms), never
-        // below the formal σ (0.5 ms with 0.7 ms removed).
+        // below the formal σ (0.6 ms, with 0.45 ms removed).
+        let cuts = |removed_s: f64| Cuts {
+            removed_s,
+            tilings: 4,
+        };
         let mut m = constant();
-        let parts = set_parameters(&mut m, &raised, &p, 0.0, ms(0.2)).unwrap();
+        let parts = set_parameters(&mut m, &raised, &p, 0.0, cuts(ms(0.2))).unwrap();
         assert!(
             close(m.sigma_s, ms(0.505f64.sqrt())) && close(parts.cuts_s, ms(0.2)),
             "{m:?}"
         );
         let mut m = constant();
-        set_parameters(&mut m, &raised, &p, 0.0, ms(0.7));
-        assert!(close(m.sigma_s, ms(0.5)), "{m:?}");
+        let mut floored = raised.clone();
+        floored.theta_formal_sigma = vec![ms(0.6)];
+        set_parameters(&mut m, &floored, &p, 0.0, cuts(ms(0.45)));
+        assert!(close(m.sigma_s, ms(0.6)), "{m:?}");
+        // A spread of the tilings as large as σ itself is not removed: 0.7 ms of 0.74 ms.
+        let mut m = constant();
+        let parts = set_parameters(&mut m, &raised, &p, 0.0, cuts(ms(0.7))).unwrap();
+        assert!(
+            close(m.sigma_s, ms(0.545f64.sqrt())) && parts.cuts_s == 0.0,
+            "{m:?}"
+        );
         // A jackknife that saw no spread is no estimate: the larger of the fit's σ and the windows'.
         let mut flat = fit(ClockShape::Constant, vec![0.1], vec![ms(0.5)]);
         flat.theta_jackknife_sigma = vec![0.0];
         let mut m = constant();
-        let parts = set_parameters(&mut m, &flat, &p, 0.0, 0.0).unwrap();
+        let parts = set_parameters(&mut m, &flat, &p, 0.0, Cuts::NONE).unwrap();
         assert!(close(m.sigma_s, ms(1.0)) && parts.combined == SigmaCombination::Larger);
         // Windows scattering ±4 ms about the offset with σ 2 ms: theirs grows by the Birge ratio
         // √(χ²/dof) = √(4·4/3) before the pooling.
@@ -1616,7 +1680,7 @@ mod tests {
             &fit(ClockShape::Constant, vec![0.1], vec![ms(0.3)]),
             &scattered,
             0.0,
-            0.0,
+            Cuts::NONE,
         );
         let windows_s = ms(1.0) * (16.0f64 / 3.0).sqrt();
         let expected = ((ms(0.3).powi(2) + windows_s * windows_s) / 2.0).sqrt();
@@ -1635,14 +1699,14 @@ mod tests {
         lever_free.variance_inflation = vec![4.0];
         assert!(close(lever_free.lever_share_s(0), ms(3f64.sqrt())));
         let mut m = ClockModel::constant(0.0, 0.0, String::new());
-        let parts = set_parameters(&mut m, &lever_free, &p, 0.0, 0.0).unwrap();
+        let parts = set_parameters(&mut m, &lever_free, &p, 0.0, Cuts::NONE).unwrap();
         assert!(close(m.sigma_s, ms(6.5f64.sqrt())), "{m:?}");
         assert!(close(parts.lever_s, ms(3f64.sqrt())));
         assert!(close(parts.windows_s.unwrap(), ms(1.0)));
         // Without a lever (inflation 1) nothing is added: √((3² + 1²)/2) ms.
         lever_free.variance_inflation = vec![1.0];
         let mut m = ClockModel::constant(0.0, 0.0, String::new());
-        let parts = set_parameters(&mut m, &lever_free, &p, 0.0, 0.0).unwrap();
+        let parts = set_parameters(&mut m, &lever_free, &p, 0.0, Cuts::NONE).unwrap();
         assert!(
             close(m.sigma_s, ms(5f64.sqrt())) && parts.lever_s == 0.0,
             "{m:?}"
@@ -1672,7 +1736,7 @@ mod tests {
             &fit(shape, vec![0.1, 0.2], vec![3e-4, 3e-4]),
             &p,
             0.0,
-            0.0,
+            Cuts::NONE,
         )
         .expect("the headline segment's parts");
         // Three windows of 2 ms: 2/√3 ms, pooled with the jackknife's 0.3 ms.
@@ -1703,11 +1767,11 @@ mod tests {
         let pooled_s = 13f64.sqrt() * 1e-3;
         // 15 ppm measured with σ 10 ppm: what a constant clock shows by chance; σ stays the pooled.
         let mut m = constant(15.0);
-        set_parameters(&mut m, &fitted, &p, 0.0, 0.0);
+        set_parameters(&mut m, &fitted, &p, 0.0, Cuts::NONE);
         assert!(close(m.sigma_s, pooled_s), "{m:?}");
         // 30 ppm, 3σ: the part beyond its noise, √(30² − 10²) ppm, over the windows' spread.
         let mut m = constant(-30.0);
-        set_parameters(&mut m, &fitted, &p, 0.0, 0.0);
+        set_parameters(&mut m, &fitted, &p, 0.0, Cuts::NONE);
         let hidden_s = 800f64.sqrt() * 1e-6 * spread_s;
         assert!(
             close(m.sigma_s, (pooled_s.powi(2) + hidden_s * hidden_s).sqrt()),
@@ -1733,7 +1797,7 @@ mod tests {
             &fit(shape.clone(), vec![0.1, -48e-6], vec![2e-4, 1e-6]),
             &p,
             0.0,
-            0.0,
+            Cuts::NONE,
         );
         assert!(close(m.drift_ppm.unwrap(), 48.0));
         assert!(close(m.drift_sigma_ppm.unwrap(), 3.0));
@@ -1745,7 +1809,7 @@ mod tests {
             &fit(shape, vec![0.1, -48e-6], vec![0.004, 5e-6]),
             &p,
             0.0,
-            0.0,
+            Cuts::NONE,
         );
         assert!(close(m.drift_sigma_ppm.unwrap(), 5.0) && close(m.sigma_s, 0.004));
     }
@@ -1887,7 +1951,7 @@ mod tests {
             &fit(ClockShape::Constant, vec![0.1], vec![2e-3]),
             &p,
             0.215,
-            0.0,
+            Cuts::NONE,
         )
         .unwrap();
         assert!(m.sigma_s > 0.215 && m.sigma_s < 0.2151, "{m:?}");
@@ -1907,7 +1971,7 @@ mod tests {
             &fit(ClockShape::Constant, vec![0.1], vec![2e-3]),
             &p,
             0.0,
-            0.0,
+            Cuts::NONE,
         )
         .unwrap();
         assert!(m.sigma_s > 0.25 && m.sigma_s < 0.2501, "{m:?}");
