@@ -1156,7 +1156,8 @@ impl Cuts {
     /// variance from n − 1 degrees of freedom, √(2/(n − 1)) of it; with four tilings, a removal
     /// up to 0.74 of σ). Beyond that the tilings' spread is as large as σ itself, which says
     /// rather that σ came out small than that the mean is nearly exact: where it was taken anyway,
-    /// 2σ covered 88 % (docs/evidence.md, "The tilings' spread, resolved or not").
+    /// 2σ covered 89 % of 223 missions of a second simulator, 97 % without it (docs/evidence.md,
+    /// "The tilings' spread, resolved or not").
     ///
     /// ```
     /// # use trajdrift_core::align::pose_model::Cuts;
