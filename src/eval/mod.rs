@@ -500,38 +500,36 @@ impl OffsetSearch<'_> {
         o: &OffsetEstimate,
         searched: Searched,
     ) -> (TimeOffsetReport, Vec<Warning>) {
-        let Some(posed) = self.pose_refined(o, &searched.methods, Starts::AnswerThenOthers) else {
+        let posed = self.pose_refined(o, &searched.methods, Starts::AnswerThenOthers);
+        if posed.is_none() {
             if let Some(rescued) = self.pose_rescued(o, &searched, Rescue::ConfidentUnfitted) {
                 return rescued;
             }
-            let (report, w) = self.over_time(o);
-            let Searched {
-                methods,
-                reason,
-                implied_lever,
-            } = searched;
-            return (
-                applied_report(report, o.method, o, methods, reason, implied_lever),
-                w,
-            );
-        };
+        }
         let Searched {
             mut methods,
             reason,
             implied_lever,
         } = searched;
-        methods.push(posed.entry);
-        let reason = format!("{reason}; {}", posed.note);
+        let (report, w, method, reason) = match posed {
+            Some(Posed {
+                report,
+                warnings: w,
+                note,
+                entry,
+                ..
+            }) => {
+                methods.push(entry);
+                (report, w, OffsetMethod::Pose, format!("{reason}; {note}"))
+            }
+            None => {
+                let (report, w) = self.over_time(o);
+                (report, w, o.method, reason)
+            }
+        };
         (
-            applied_report(
-                posed.report,
-                OffsetMethod::Pose,
-                o,
-                methods,
-                reason,
-                implied_lever,
-            ),
-            posed.warnings,
+            applied_report(report, method, o, methods, reason, implied_lever),
+            w,
         )
     }
 

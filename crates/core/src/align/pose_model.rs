@@ -1227,8 +1227,9 @@ fn set_parameters(
     let offset_sigma = |k: usize, span: (f64, f64)| {
         let windows_s = windows_offset_sigma_s(profile, span);
         let jackknife = last.theta_jackknife_sigma[k];
+        let inside = windows_inside(profile, span);
         match windows_s {
-            Some(w) if jackknife > 0.0 && windows_inside(profile, span) >= MIN_POOLED_WINDOWS => {
+            Some(w) if jackknife > 0.0 && inside >= MIN_POOLED_WINDOWS => {
                 let lever_s = last.lever_share_s(k);
                 // k windows combined estimate a k-window answer's error; the fit's is over n.
                 let fitted = last
@@ -1236,7 +1237,7 @@ fn set_parameters(
                     .iter()
                     .filter(|x| (span.0..=span.1).contains(&x.t()))
                     .count();
-                let w = w * windows_share(windows_inside(profile, span), fitted).sqrt();
+                let w = w * windows_share(inside, fitted).sqrt();
                 let windows_s = Some(w);
                 let windows_var = w * w + lever_s * lever_s;
                 let s = ((jackknife * jackknife + windows_var) / 2.0)
