@@ -122,3 +122,16 @@ def test_a_tilings_spread_as_large_as_sigma_is_not_taken_from_it(tmp_path):
     error_s, what = applied_pose_error(o, info)
     assert o["status"] == "ok", what
     assert abs(error_s) <= 0.02 and abs(error_s) <= 3 * o["sigma_s"] <= 0.05, what
+
+
+def test_a_lead_fit_needing_a_longer_lever_than_the_search_allows_is_dropped(tmp_path):
+    # A walking robot on a 2 Hz reference (receipt stamps; the estimate's sensor 0.24 m aside and
+    # 0.44 m up): speed matched the smooth walk confidently at +5.6 s, signed curvature at +0.24 s
+    # (right within 73 ms). The lead search's fit 3.44 s off traded Δt for a forward lever of
+    # 0.86 ± 0.07 m and the referee preferred it: exit 0 under σ 0.42 s. A lead fit needing a
+    # forward lever beyond the search's `LEAD_LEVER_M` by two of its σ is no candidate
+    # (`within_lead_lever` in `align::pose_model`, its unit test).
+    o, info = time_offset(tmp_path, "receipt", 113505)
+    error_s, what = applied_pose_error(o, info)
+    assert o["status"] == "ok", what
+    assert abs(error_s) <= 0.01 and abs(error_s) <= 2 * o["sigma_s"] <= 0.02, what

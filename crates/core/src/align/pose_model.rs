@@ -60,8 +60,11 @@
 //! latest, the lever solved at each candidate ([`pose_fit::coarse_minima`]); constant fits start
 //! from the scan's best minima (with the lever found there, else none; one that leaves its
 //! minimum's basin is made again on [`pose_fit::NARROW_JACOBIAN_PERIODS`], as a gait's bob can
-//! turn the default Jacobian negative) and compete with the near
-//! fit on their residual per point over the **referee's windows**: [`REFEREE_WINDOW_S`] long (at
+//! turn the default Jacobian negative; one whose forward lever exceeds [`LEAD_LEVER_M`] beyond
+//! [`LEAD_SIGNIFICANCE_T`] of its σ traded Δt for a lever the search does not allow for, and is
+//! dropped: a walking robot's fit 3.4 s off with a lever of 0.86 m had won there; on the
+//! second simulator's 897 other walking missions the reported fit's was 0.39 m at most)
+//! and compete with the near fit on their residual per point over the **referee's windows**: [`REFEREE_WINDOW_S`] long (at
 //! most a sixth of the mission), each fit's Δt held and the lever settled there
 //! ([`pose_fit::residuals_at`]). A 20 s window's own heading and translation take an along-track
 //! shift of the path as it comes, so on the fits' windows the valley is nearly flat; over 80 s the
@@ -737,6 +740,7 @@ fn lead_search(
                 Some(f) if stays(&f) => Some(f),
                 other => from(&narrow).filter(stays).or(other),
             }
+            .filter(within_lead_lever)
             .map(|f| (f, Some(m)))
         });
     let fits: Vec<(PoseFit, Option<pose_fit::ScanMinimum>)> =
@@ -769,7 +773,7 @@ fn lead_search(
     };
     let again = |m: &pose_fit::ScanMinimum| {
         fit_on(data, &kept, m.offset_s, m.lever_m)
-            .filter(|f| (f.theta[0] - m.offset_s).abs() <= SAME_BASIN_S)
+            .filter(|f| (f.theta[0] - m.offset_s).abs() <= SAME_BASIN_S && within_lead_lever(f))
             .map(|f| judged(f, Some(*m)))
     };
     let mut fits: Vec<LeadFit> = fits
@@ -793,6 +797,19 @@ fn lead_search(
         windows: kept,
         fits,
     })
+}
+
+/// Whether a fit's forward lever is one the lead search allows for: not beyond [`LEAD_LEVER_M`]
+/// by more than [`LEAD_SIGNIFICANCE_T`] of its σ (a fit without a lever, or without its σ, is).
+/// The search scans only the lead such a lever makes; a fit along the valley that needs a longer
+/// one traded Δt for a lever the mission does not have.
+///
+/// ```text
+/// forward 0.86 ± 0.07 m → no (0.86 − 2·0.07 > 0.5);  0.39 ± 0.01 m → yes;  0.6 ± 0.1 m → yes
+/// ```
+fn within_lead_lever(fit: &PoseFit) -> bool {
+    let sigma_m = fit.lever_sigma_m.map_or(f64::INFINITY, |s| s.x);
+    fit.lever_m.x.abs() - LEAD_SIGNIFICANCE_T * sigma_m <= LEAD_LEVER_M
 }
 
 /// The paired t statistic of `a` − `b` over the windows both have (negative: `a` fits better):
@@ -1830,6 +1847,27 @@ mod tests {
             Some(OffsetModel::Piecewise)
         ));
         assert!(!lead_searched(OffsetModel::Linear, None));
+    }
+
+    #[test]
+    fn a_lead_fit_needing_a_forward_lever_beyond_the_searchs_is_not_a_candidate() {
+        let with_lever = |x: f64, sigma_x: Option<f64>| PoseFit {
+            lever_m: Vector3::new(x, 0.3, -0.4),
+            lever_sigma_m: sigma_x.map(|s| Vector3::new(s, 0.04, 0.4)),
+            ..fit(ClockShape::Constant, vec![3.76], vec![0.04])
+        };
+        // A walking robot's fit 3.4 s off traded Δt for a forward lever of 0.86 ± 0.07 m.
+        assert!(!within_lead_lever(&with_lever(-0.86, Some(0.07))));
+        assert!(within_lead_lever(&with_lever(0.39, Some(0.01))));
+        // Beyond the bound, but not by two of its σ: the data do not say it is.
+        assert!(within_lead_lever(&with_lever(0.6, Some(0.1))));
+        // Only the forward lever trades with Δt (the lateral and vertical ones do not count).
+        assert!(within_lead_lever(&PoseFit {
+            lever_m: Vector3::new(0.1, 0.9, 0.9),
+            ..with_lever(0.1, Some(0.01))
+        }));
+        // Without a fitted lever's σ nothing rules the fit out.
+        assert!(within_lead_lever(&with_lever(-0.86, None)));
     }
 
     #[test]
