@@ -115,7 +115,9 @@ pub const POSE_SIGMA_FLOOR_S: f64 = 1e-4;
 /// fit went to another basin and is not used (only the lead search looks farther, and judges the
 /// basins it finds on every window).
 pub const MAX_DISAGREEMENT_S: f64 = 0.3;
-/// The largest lever between the two sensors the lead search allows for, metres.
+/// The largest forward lever between the two sensors the lead search allows for, metres (it runs
+/// on walking robots only, whose sensors sit on one body; the signal searches' disagreement is read
+/// as a lever up to [`crate::align::auto_offset::MAX_LEVER_M`], a vehicle's antenna included).
 pub const LEAD_LEVER_M: f64 = 0.5;
 /// The lead at most, seconds (a lever of 0.5 m at 0.2 m/s).
 pub const MAX_LEAD_S: f64 = 2.5;
