@@ -743,7 +743,11 @@ impl OffsetSearch<'_> {
             self.config.params.forced_offset_model(),
         )?;
         let model = &pc.model;
-        let warnings = model_warnings(self.config, model, &self.est.name);
+        let mut warnings = model_warnings(self.config, model, &self.est.name);
+        warnings.extend(
+            pc.beyond_lever
+                .map(|b| long_lever_warning(&self.est.name, &pc, b)),
+        );
         let (lever, lever_sigma) = pc.lever;
         let report = TimeOffsetReport {
             fitted_lever_m: Some([lever.x, lever.y, lever.z]),
@@ -1176,6 +1180,12 @@ fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
             }
         ));
     }
+    if let Some(b) = pc.beyond_lever {
+        note.push_str(&format!(
+            "; a fit at {:+.3} s fits the referee's longer windows better but needs the sensor {:+.2} m ahead along the direction of travel, beyond what a walking robot's lead search allows for: left out (long_lever_left_out)",
+            b.offset_s, b.forward_m,
+        ));
+    }
     if pc.outlier_windows > 0 {
         note.push_str(&format!(
             "; {} window(s) left out: the estimate jumps there (a position correction, not a clock event)",
@@ -1193,6 +1203,29 @@ fn pose_note(pc: &crate::align::pose_model::PoseClock) -> String {
         );
     }
     note
+}
+
+/// The warning that a fit needing a longer forward lever than the lead search allows for
+/// (`b`) fits the windows better than the one applied: Δt holds only if the sensors are within
+/// [`LEAD_LEVER_M`] of each other along the travel.
+///
+/// [`LEAD_LEVER_M`]: crate::align::pose_model::LEAD_LEVER_M
+fn long_lever_warning(
+    name: &str,
+    pc: &crate::align::pose_model::PoseClock,
+    b: crate::align::pose_model::BeyondLever,
+) -> Warning {
+    Warning::new(
+        WarningCode::LongLeverLeftOut,
+        format!(
+            "{name}: a clock offset of {:+.3} s with the sensor {:+.2} ± {:.2} m ahead of the reference's point fits better than the {:+.3} s applied, which assumes the two within {:.1} m along the direction of travel; if they sit farther apart, give --estimate-lever and --reference-lever",
+            b.offset_s,
+            b.forward_m,
+            b.forward_sigma_m,
+            pc.first_offset.0,
+            crate::align::pose_model::LEAD_LEVER_M
+        ),
+    )
 }
 
 /// The pose fit's row of `methods`: its first clock parameter and its windows' median correlation.

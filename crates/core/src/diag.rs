@@ -20,6 +20,10 @@ pub enum WarningCode {
     LeverArmSuspected,
     /// The methods disagreed and the lever-arm explanation could not be checked.
     LeverArmUnchecked,
+    /// A walking robot's pose fit left out a fit that fits the windows better but needs a longer
+    /// forward lever than its lead search allows for (right only where the sensors sit that far
+    /// apart, and then the levers are to be given).
+    LongLeverLeftOut,
     /// An audit's pairwise clock offsets do not add up around a triple of sources (closure).
     ClockClosureFailed,
 }
@@ -35,6 +39,7 @@ impl WarningCode {
             WarningCode::ClockStepSuspected => "clock_step_suspected",
             WarningCode::LeverArmSuspected => "lever_arm_suspected",
             WarningCode::LeverArmUnchecked => "lever_arm_unchecked",
+            WarningCode::LongLeverLeftOut => "long_lever_left_out",
             WarningCode::ClockClosureFailed => "clock_closure_failed",
         }
     }
@@ -86,6 +91,7 @@ mod tests {
             WarningCode::ClockStepSuspected,
             WarningCode::LeverArmSuspected,
             WarningCode::LeverArmUnchecked,
+            WarningCode::LongLeverLeftOut,
             WarningCode::ClockClosureFailed,
         ] {
             assert_eq!(

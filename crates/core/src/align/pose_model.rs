@@ -257,6 +257,22 @@ pub struct PoseClock {
     pub sigma_parts: Option<SigmaParts>,
     /// When the lead search's constant replaced what the windows chose from the start.
     pub replaced: Option<Replaced>,
+    /// A fit the lead search left out for its forward lever that fits the referee's windows
+    /// better than the one reported (see [`within_lead_lever`]).
+    pub beyond_lever: Option<BeyondLever>,
+}
+
+/// A lead-search fit left out because its forward lever exceeds [`LEAD_LEVER_M`] beyond
+/// [`LEAD_SIGNIFICANCE_T`] of its σ, that fits the referee's windows better than the reported fit
+/// ([`PoseClock::beyond_lever`]): right only on a robot whose sensors sit that far apart along its
+/// travel, where the user gives the levers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BeyondLever {
+    /// Its Δt, seconds.
+    pub offset_s: f64,
+    /// Its forward lever and that lever's σ, metres.
+    pub forward_m: f64,
+    pub forward_sigma_m: f64,
 }
 
 /// What the lead search's constant replaced ([`PoseClock::replaced`]).
@@ -391,6 +407,10 @@ pub fn pose_clock_model(
         (Some(lead), OffsetModel::Constant) => lead.valley_s(&data, &last),
         _ => 0.0,
     };
+    let beyond_lever = match (&lead, model.model) {
+        (Some(lead), OffsetModel::Constant) => lead.beyond_lever(&data, &last),
+        _ => None,
+    };
     let sigma_parts = set_parameters(&mut model, &last, &profile, valley_s, cuts);
     model.describe();
     // θ₀'s σ as reported: the headline's, or the first segment's.
@@ -407,6 +427,7 @@ pub fn pose_clock_model(
         lever: (last.lever_m, last.lever_sigma_m),
         fit: Some(last),
         replaced,
+        beyond_lever,
     })
 }
 
@@ -485,6 +506,8 @@ pub fn scale_prior_m(moving_speed_mps: Option<f64>) -> f64 {
 struct Lead {
     windows: Vec<pose_fit::Window>,
     fits: Vec<LeadFit>,
+    /// The fits left out for their forward lever ([`within_lead_lever`]), judged on `windows`.
+    beyond: Vec<LeadFit>,
 }
 
 /// A fit along the valley: the residual per point at its Δt in every window of [`Lead::windows`]
@@ -550,6 +573,33 @@ impl Lead {
         let at_minimum = |m: &pose_fit::ScanMinimum| at(m.offset_s);
         let candidates = self.candidates(reported.theta[0], at_minimum);
         undecided_reach_s(reported.theta[0], &residuals, candidates)
+    }
+
+    /// The fit left out for its forward lever that fits the windows best, where it fits them better
+    /// than `reported` (a negative paired t): what the bound decided.
+    fn beyond_lever(&self, data: &PoseData<'_>, reported: &PoseFit) -> Option<BeyondLever> {
+        if self.beyond.is_empty() {
+            return None;
+        }
+        self.beyond_against(&pose_fit::residuals_at(
+            data,
+            &self.windows,
+            reported.theta[0],
+        ))
+    }
+
+    /// [`Lead::beyond_lever`] against the reported fit's windows' `residuals`.
+    fn beyond_against(&self, residuals: &[Option<f64>]) -> Option<BeyondLever> {
+        self.beyond
+            .iter()
+            .map(|b| (b, paired_t(&b.residuals, residuals)))
+            .filter(|(_, t)| *t < 0.0)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(b, _)| BeyondLever {
+                offset_s: b.fit.theta[0],
+                forward_m: b.fit.lever_m.x,
+                forward_sigma_m: b.fit.lever_sigma_m.map_or(f64::NAN, |s| s.x),
+            })
     }
 
     /// The valley's candidates against a fit at `at_s`: each fit's Δt and residuals, or the
@@ -741,11 +791,15 @@ fn lead_search(
                 Some(f) if stays(&f) => Some(f),
                 other => from(&narrow).filter(stays).or(other),
             }
-            .filter(within_lead_lever)
             .map(|f| (f, Some(m)))
         });
-    let fits: Vec<(PoseFit, Option<pose_fit::ScanMinimum>)> =
-        far.chain(near.cloned().map(|f| (f, None))).collect();
+    // A fit that needs a longer forward lever than the search allows for is no candidate; kept
+    // aside to say so where it fits the windows better than the one reported.
+    let (far, beyond): (Vec<_>, Vec<_>) = far.partition(|(f, _)| within_lead_lever(f));
+    let fits: Vec<(PoseFit, Option<pose_fit::ScanMinimum>)> = far
+        .into_iter()
+        .chain(near.cloned().map(|f| (f, None)))
+        .collect();
     // Windows a fit left out (a jump of the estimate) would weigh on every comparison; where that
     // leaves the referee too few, the fits' own windows judge.
     let left_out = |w: &pose_fit::Window| {
@@ -794,9 +848,14 @@ fn lead_search(
             .filter(|m| worse(n, m))
     });
     fits.extend(near_minimum.and_then(again));
+    let beyond = beyond
+        .into_iter()
+        .map(|(f, from)| judged(f, from))
+        .collect();
     Some(Lead {
         windows: kept,
         fits,
+        beyond,
     })
 }
 
@@ -1039,6 +1098,7 @@ impl Mission<'_, '_> {
             model,
             lever: (lever_m, None),
             replaced: None,
+            beyond_lever: None,
         })
     }
 
@@ -1872,6 +1932,55 @@ mod tests {
     }
 
     #[test]
+    fn a_long_lever_fit_left_out_is_told_where_it_fits_the_windows_better() {
+        // Residuals of 20 windows: `level` each, ± `wobble` alternately.
+        let shifted = |level: f64, wobble: f64| -> Vec<Option<f64>> {
+            (0..20)
+                .map(|k| Some(level + if k % 2 == 0 { wobble } else { -wobble }))
+                .collect()
+        };
+        let long = |theta: f64, forward_m: f64| PoseFit {
+            lever_m: Vector3::new(forward_m, 0.0, 0.0),
+            lever_sigma_m: Some(Vector3::new(0.01, 0.01, 0.05)),
+            ..fit(ClockShape::Constant, vec![theta], vec![1e-3])
+        };
+        let lead = |beyond: Vec<(PoseFit, Vec<Option<f64>>)>| Lead {
+            windows: Vec::new(),
+            fits: Vec::new(),
+            beyond: beyond
+                .into_iter()
+                .map(|(fit, residuals)| LeadFit {
+                    fit,
+                    residuals,
+                    from: None,
+                })
+                .collect(),
+        };
+        let reported = shifted(1.0, 0.01);
+        // Worse than the reported fit in every window: nothing to tell.
+        assert_eq!(
+            lead(vec![(long(3.7, -0.86), shifted(1.2, 0.01))]).beyond_against(&reported),
+            None
+        );
+        // Better: the best of those that are.
+        let told = lead(vec![
+            (long(3.7, -0.86), shifted(1.2, 0.01)),
+            (long(-0.22, 0.71), shifted(0.9, 0.01)),
+            (long(0.9, 0.66), shifted(0.99, 0.02)),
+        ])
+        .beyond_against(&reported);
+        assert_eq!(
+            told,
+            Some(BeyondLever {
+                offset_s: -0.22,
+                forward_m: 0.71,
+                forward_sigma_m: 0.01
+            })
+        );
+        assert!(lead(Vec::new()).beyond_against(&reported).is_none());
+    }
+
+    #[test]
     fn fits_along_the_valley_the_windows_cannot_tell_apart_widen_sigma() {
         let at = |theta: f64| fit(ClockShape::Constant, vec![theta], vec![1e-3]);
         // Twenty windows' residuals per point (mm²) of one fit, a wobble of ±0.1 about 1.
@@ -1918,6 +2027,7 @@ mod tests {
                     residuals,
                 })
                 .collect(),
+            beyond: Vec::new(),
         };
         let lead = lead_of(vec![
             (at(0.43), shifted(0.005, 0.1), false),
@@ -1969,6 +2079,7 @@ mod tests {
                     lever_m: Vector3::zeros(),
                 }),
             }],
+            beyond: Vec::new(),
         };
         let as_good = |_: &pose_fit::ScanMinimum| shifted(0.005, 0.1);
         let worse = |_: &pose_fit::ScanMinimum| shifted(0.3, 0.01);
