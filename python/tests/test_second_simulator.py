@@ -127,11 +127,30 @@ def test_a_tilings_spread_as_large_as_sigma_is_not_taken_from_it(tmp_path):
 def test_a_lead_fit_needing_a_longer_lever_than_the_search_allows_is_dropped(tmp_path):
     # A walking robot on a 2 Hz reference (receipt stamps; the estimate's sensor 0.24 m aside and
     # 0.44 m up): speed matched the smooth walk confidently at +5.6 s, signed curvature at +0.24 s
-    # (right within 73 ms). The lead search's fit 3.44 s off traded Δt for a forward lever of
-    # 0.86 ± 0.07 m and the referee preferred it: exit 0 under σ 0.42 s. A lead fit needing a
-    # forward lever beyond the search's `LEAD_LEVER_M` by two of its σ is no candidate
-    # (`within_lead_lever` in `align::pose_model`, its unit test).
+    # (right within 73 ms). No pose fit could be made from speed's answer, and the lead search's
+    # fit 3.44 s off, trading Δt for a forward lever of 0.86 ± 0.07 m, stood: exit 0 under σ
+    # 0.42 s. Where no fit was made from the start, a lead fit needing a forward lever beyond the
+    # search's `LEAD_LEVER_M` by two of its σ is no candidate (`within_lead_lever` in
+    # `align::pose_model`, its unit test).
     o, info = time_offset(tmp_path, "receipt", 113505)
     error_s, what = applied_pose_error(o, info)
     assert o["status"] == "ok", what
     assert abs(error_s) <= 0.01 and abs(error_s) <= 2 * o["sigma_s"] <= 0.02, what
+
+
+def test_a_long_lever_the_lead_search_leaves_out_is_said_and_the_levers_given_mend_it(tmp_path):
+    # A walking robot turning in place (1 Hz reference), its estimate's sensor 0.6–0.9 m from the
+    # reference's point along the travel (`--long-levers`): beyond the 0.5 m the lead search
+    # allows for. No fit was made from the start; the lead search's fit with the long lever was
+    # right but is no candidate there, and the answer from another start is off. The warning
+    # `long_lever_left_out` says so (exit 3); with the true levers given the answer is right.
+    sim = independent_missions()
+    ref, est, info = sim.mission("turns", 204205, long_lever=True)
+    o, codes = sim.evaluate(trajdrift_command(), ref, est, str(tmp_path))
+    assert o is not None, codes
+    error_s = o["offset_s"] - info["truth_s"]
+    assert abs(error_s) <= 0.01 or "long_lever_left_out" in codes, (error_s, codes)
+    o, codes = sim.evaluate(trajdrift_command(), ref, est, str(tmp_path), levers=info)
+    assert o is not None, codes
+    error_s = o["offset_s"] - info["truth_s"]
+    assert abs(error_s) <= 0.01 and abs(error_s) <= 3 * o["sigma_s"], (error_s, o["sigma_s"], codes)

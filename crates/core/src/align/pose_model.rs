@@ -60,33 +60,33 @@
 //! candidate ([`pose_fit::coarse_minima`]); constant fits start from the scan's best minima (with
 //! the lever found there, else none; one that leaves its minimum's basin is made again on
 //! [`pose_fit::NARROW_JACOBIAN_PERIODS`], as a gait's bob can turn the default Jacobian negative;
-//! one whose forward lever exceeds [`LEAD_LEVER_M`] beyond [`LEAD_SIGNIFICANCE_T`] of its σ traded
-//! Δt for a lever the search does not allow for, and is dropped, said where it fits better
-//! ([`PoseClock::beyond_lever`]): a walking robot's fit 3.4 s off with a lever of 0.86 m had won
-//! there; on the second simulator's 897 other walking missions the reported fit's was 0.39 m at
-//! most) and compete with the near fit on their residual per point over the **referee's windows**:
-//! [`REFEREE_WINDOW_S`] long (at most a sixth of the mission), each fit's Δt held and the lever
-//! settled there ([`pose_fit::residuals_at`]). A 20 s window's own heading and translation take an
-//! along-track shift of the path as it comes, so on the fits' windows the valley is nearly flat;
-//! over 80 s the speed changes, and the truth's basin is the deepest where on 20 s windows another
-//! was (the scan runs on the referee's windows too). A fit the referee finds worse than the minimum
-//! it started from beyond [`LEAD_SIGNIFICANCE_T`] (it climbed out of that basin), and a minimum by
-//! the near fit that it finds better than the near fit, are fitted again on the referee's windows
-//! from the minimum (where a jump of the estimate leaves the referee fewer than three windows, the
-//! fits' own windows judge). The best replaces the near fit (in the near fit's basin only when
-//! better beyond the paired t) when the profile measured from it chooses a constant clock too (only
-//! then: across a clock step the constant trades its lever for Δt as well, and the other segment's
-//! basin fits better); where fewer than three of that profile's windows converge on the default
-//! Jacobian, it is measured on the narrow one, as the caller does where the default cannot make the
-//! near fit (a walking robot with receipt stamps: not one of 44 windows converged from the right
-//! fit on the default, and the near fit, worse by a paired t of 25, stayed 655 ms off; on the
-//! narrow one all 44 lay within 5 ms of it). Where another fit (or the scan's minimum it started
-//! from, where that fits the windows better than the fit that climbed from it) is not worse beyond
-//! [`LEAD_SIGNIFICANCE_T`] (a paired t over the referee's windows' residuals: the windows are
-//! independent where the points are not), the data cannot tell the two apart, and the constant's σ
-//! adds half their distance in quadrature (`sigma_parts.valley_s`). Measured on a second
-//! simulator's missions (docs/evidence.md, "A second simulator, and the lead search", "The valley
-//! refereed on longer windows").
+//! where no fit could be made from the start, one whose forward lever exceeds [`LEAD_LEVER_M`]
+//! beyond [`LEAD_SIGNIFICANCE_T`] of its σ traded Δt for a lever the search does not allow for, and
+//! is dropped, said where it fits better ([`PoseClock::beyond_lever`]): a walking robot's fit 3.4 s
+//! off with a lever of 0.86 m had won there; on the second simulator's 897 other walking missions
+//! the reported fit's was 0.39 m at most) and compete with the near fit on their residual per point
+//! over the **referee's windows**: [`REFEREE_WINDOW_S`] long (at most a sixth of the mission), each
+//! fit's Δt held and the lever settled there ([`pose_fit::residuals_at`]). A 20 s window's own
+//! heading and translation take an along-track shift of the path as it comes, so on the fits'
+//! windows the valley is nearly flat; over 80 s the speed changes, and the truth's basin is the
+//! deepest where on 20 s windows another was (the scan runs on the referee's windows too). A fit
+//! the referee finds worse than the minimum it started from beyond [`LEAD_SIGNIFICANCE_T`] (it
+//! climbed out of that basin), and a minimum by the near fit that it finds better than the near
+//! fit, are fitted again on the referee's windows from the minimum (where a jump of the estimate
+//! leaves the referee fewer than three windows, the fits' own windows judge). The best replaces the
+//! near fit (in the near fit's basin only when better beyond the paired t) when the profile
+//! measured from it chooses a constant clock too (only then: across a clock step the constant
+//! trades its lever for Δt as well, and the other segment's basin fits better); where fewer than
+//! three of that profile's windows converge on the default Jacobian, it is measured on the narrow
+//! one, as the caller does where the default cannot make the near fit (a walking robot with receipt
+//! stamps: not one of 44 windows converged from the right fit on the default, and the near fit,
+//! worse by a paired t of 25, stayed 655 ms off; on the narrow one all 44 lay within 5 ms of it).
+//! Where another fit (or the scan's minimum it started from, where that fits the windows better
+//! than the fit that climbed from it) is not worse beyond [`LEAD_SIGNIFICANCE_T`] (a paired t over
+//! the referee's windows' residuals: the windows are independent where the points are not), the
+//! data cannot tell the two apart, and the constant's σ adds half their distance in quadrature
+//! (`sigma_parts.valley_s`). Measured on a second simulator's missions (docs/evidence.md, "A second
+//! simulator, and the lead search", "The valley refereed on longer windows").
 //!
 //! A constant clock whose drift the data cannot resolve could still hide one below the resolution:
 //! when the profile's line measures a drift d beyond [`HIDDEN_DRIFT_Z`] of its σ_d (a drift the data
@@ -795,9 +795,14 @@ fn lead_search(
             }
             .map(|f| (f, Some(m)))
         });
-    // A fit that needs a longer forward lever than the search allows for is no candidate; kept
-    // aside to say so where it fits the windows better than the one reported.
-    let (far, beyond): (Vec<_>, Vec<_>) = far.partition(|(f, _)| within_lead_lever(f));
+    // Where no fit could be made from the start, a fit that needs a longer forward lever than
+    // the search allows for is no candidate (nothing else weighs against the lever it traded Δt
+    // for); kept aside to say so where it fits the windows better than the one reported. Beside
+    // a near fit, the referee judges every fit as it comes (on robots whose sensors sit farther
+    // apart the near fit or a far one is often right).
+    let bounded = near.is_none();
+    let admitted = |f: &PoseFit| !bounded || within_lead_lever(f);
+    let (far, beyond): (Vec<_>, Vec<_>) = far.partition(|(f, _)| admitted(f));
     let fits: Vec<(PoseFit, Option<pose_fit::ScanMinimum>)> = far
         .into_iter()
         .chain(near.cloned().map(|f| (f, None)))
@@ -830,7 +835,7 @@ fn lead_search(
     };
     let again = |m: &pose_fit::ScanMinimum| {
         fit_on(data, &kept, m.offset_s, m.lever_m)
-            .filter(|f| (f.theta[0] - m.offset_s).abs() <= SAME_BASIN_S && within_lead_lever(f))
+            .filter(|f| (f.theta[0] - m.offset_s).abs() <= SAME_BASIN_S && admitted(f))
             .map(|f| judged(f, Some(*m)))
     };
     let mut fits: Vec<LeadFit> = fits
@@ -864,8 +869,9 @@ fn lead_search(
 /// Whether a fit's forward lever is one the lead search allows for: not beyond [`LEAD_LEVER_M`]
 /// by more than [`LEAD_SIGNIFICANCE_T`] of its σ (a fit without a lever, or without its σ, is).
 /// The search scans only the lead such a lever makes; a fit along the valley that needs a longer
-/// one traded Δt for a lever beyond that premise (where it fits the windows better than the fit
-/// reported, [`PoseClock::beyond_lever`] says so: right only where the sensors sit that far apart).
+/// one, with no fit from the start to weigh it against, traded Δt for a lever beyond that premise
+/// (where it fits the windows better than the fit reported, [`PoseClock::beyond_lever`] says so:
+/// right only where the sensors sit that far apart).
 ///
 /// ```text
 /// forward 0.86 ± 0.07 m → no (0.86 − 2·0.07 > 0.5);  0.39 ± 0.01 m → yes;  0.6 ± 0.1 m → yes
