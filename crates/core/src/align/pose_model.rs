@@ -53,9 +53,11 @@
 //! lever/speed (at a walk, a 0.3 m lever is a second), and the fit from there stays in the long
 //! valley where Δt trades against the forward lever, which only the gait's ripple of the speed and
 //! the turns slope; a speed search can match a smooth walking speed at a wrong lag, confidently.
-//! Where the windows chose one constant clock and [`LEAD_LEVER_M`] over the reference's mean speed
-//! while it moves (the lead, at most [`MAX_LEAD_S`]) exceeds [`LEAD_REACH`] times
-//! [`MAX_DISAGREEMENT_S`] (the robot is [`walking`]), Δt is scanned from the lead before the
+//! Where the windows chose one constant clock, or a step or a drift of their own (windows started a
+//! lead away settle in the gait's basins, which read as either; not a model the user forced), and
+//! [`LEAD_LEVER_M`] over the reference's mean speed while it moves (the lead, at most
+//! [`MAX_LEAD_S`]) exceeds [`LEAD_REACH`] times [`MAX_DISAGREEMENT_S`] (the robot is
+//! [`walking`]), Δt is scanned from the lead before the
 //! earliest confident search's answer to the lead after the latest, the lever solved at each
 //! candidate ([`pose_fit::coarse_minima`]); constant fits start from the scan's best minima (with
 //! the lever found there, else none; one that leaves its minimum's basin is made again on
@@ -76,7 +78,8 @@
 //! leaves the referee fewer than three windows, the fits' own windows judge). The best replaces the
 //! near fit (in the near fit's basin only when better beyond the paired t) when the profile
 //! measured from it chooses a constant clock too (only then: across a clock step the constant
-//! trades its lever for Δt as well, and the other segment's basin fits better); where fewer than
+//! trades its lever for Δt as well, and the other segment's basin fits better; a true drift
+//! stays a drift, as on every drifting walking robot of `trajdrift validate`); where fewer than
 //! three of that profile's windows converge on the default Jacobian, it is measured on the narrow
 //! one, as the caller does where the default cannot make the near fit (a walking robot with receipt
 //! stamps: not one of 44 windows converged from the right fit on the default, and the near fit,
@@ -336,12 +339,12 @@ pub fn pose_clock_model(
         forced,
     };
     let mut chosen = mission.choose(start_s)?;
-    // The lead search, where the windows chose one constant clock or a step of their own
-    // (`lead_searched`): across a true clock step the constant trades its lever for Δt as well,
-    // and the other segment's basin fits better, so a far constant replaces the chosen model only
-    // when the profile measured from it chooses a constant too.
+    // The lead search, where the windows chose one constant clock, or a step or a drift of their
+    // own (`lead_searched`): across a true clock step the constant trades its lever for Δt as
+    // well, and the other segment's basin fits better, so a far constant replaces the chosen model
+    // only when the profile measured from it chooses a constant too (a true step or drift stays).
     // A drift the final fit leaves below the resolution (`resolved`) becomes a constant after
-    // this: the windows chose a drift there, and the search is not run.
+    // this.
     // The near fit: the whole mission's, or without one the chosen constant's.
     let near = mission.whole.clone().or_else(|| chosen.fit.clone());
     let lead = lead_searched(chosen.model.model, mission.forced)
@@ -646,15 +649,16 @@ fn undecided_reach_s(
 }
 
 /// Whether the lead search runs on a mission whose windows chose `model` (`forced`: the user's
-/// model, if any): on a constant clock, and on a step the windows chose themselves — a walking
-/// robot's windows started a lead away from the truth settle in the gait's basins along the
-/// valley, a second apart, and read as a step; a constant from the search replaces it only
-/// when the profile measured from there chooses a constant too (a true step stays a step).
+/// model, if any): on a constant clock, and on a step or a drift the windows chose themselves — a
+/// walking robot's windows started a lead away from the truth settle in the gait's basins along
+/// the valley, a second apart, and read as a step, or, basin by basin along the mission, as a
+/// drift (a 20 Hz walking robot whose speed search matched a lag 0.9 s off read −1521 ppm); a
+/// constant from the search replaces it only when the profile measured from there chooses a
+/// constant too (a true step stays a step, a true drift a drift).
 fn lead_searched(model: OffsetModel, forced: Option<OffsetModel>) -> bool {
     match model {
         OffsetModel::Constant => true,
-        OffsetModel::Piecewise => forced.is_none(),
-        OffsetModel::Linear => false,
+        OffsetModel::Piecewise | OffsetModel::Linear => forced.is_none(),
     }
 }
 
@@ -1904,7 +1908,7 @@ mod tests {
     }
 
     #[test]
-    fn the_lead_search_questions_a_constant_and_a_step_of_the_windows_own_not_a_drift_or_a_forced_model(
+    fn the_lead_search_questions_a_constant_and_a_step_or_a_drift_of_the_windows_own_not_a_forced_model(
     ) {
         assert!(lead_searched(OffsetModel::Constant, None));
         assert!(lead_searched(OffsetModel::Piecewise, None));
@@ -1916,7 +1920,11 @@ mod tests {
             OffsetModel::Piecewise,
             Some(OffsetModel::Piecewise)
         ));
-        assert!(!lead_searched(OffsetModel::Linear, None));
+        assert!(lead_searched(OffsetModel::Linear, None));
+        assert!(!lead_searched(
+            OffsetModel::Linear,
+            Some(OffsetModel::Linear)
+        ));
     }
 
     #[test]
