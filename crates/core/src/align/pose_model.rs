@@ -57,11 +57,11 @@
 //! lead away settle in the gait's basins, which read as either; not a model the user forced), and
 //! [`LEAD_LEVER_M`] over the reference's mean speed while it moves (the lead, at most
 //! [`MAX_LEAD_S`]) exceeds [`LEAD_REACH`] times [`MAX_DISAGREEMENT_S`] (the robot is
-//! [`walking`]), Δt is scanned from the lead before the
-//! earliest confident search's answer to the lead after the latest, the lever solved at each
-//! candidate ([`pose_fit::coarse_minima`]); constant fits start from the scan's best minima (with
-//! the lever found there, else none; one that leaves its minimum's basin is made again on
-//! [`pose_fit::NARROW_JACOBIAN_PERIODS`], as a gait's bob can turn the default Jacobian negative;
+//! [`walking`]), Δt is scanned from the lead before the earliest confident search's answer to the
+//! lead after the latest, the lever solved at each candidate ([`pose_fit::coarse_minima`]);
+//! constant fits start from the scan's best minima (with the lever found there, else none; one that
+//! leaves its minimum's basin is made again on [`pose_fit::NARROW_JACOBIAN_PERIODS`], as a gait's
+//! bob can turn the default Jacobian negative;
 //! where no fit could be made from the start, one whose forward lever exceeds [`LEAD_LEVER_M`]
 //! beyond [`LEAD_SIGNIFICANCE_T`] of its σ traded Δt for a lever the search does not allow for, and
 //! is dropped, said where it fits better ([`PoseClock::beyond_lever`]): a walking robot's fit 3.4 s
@@ -804,8 +804,7 @@ fn lead_search(
     // for); kept aside to say so where it fits the windows better than the one reported. Beside
     // a near fit, the referee judges every fit as it comes (on robots whose sensors sit farther
     // apart the near fit or a far one is often right).
-    let bounded = near.is_none();
-    let admitted = |f: &PoseFit| !bounded || within_lead_lever(f);
+    let admitted = |f: &PoseFit| near.is_some() || within_lead_lever(f);
     let (far, beyond): (Vec<_>, Vec<_>) = far.partition(|(f, _)| admitted(f));
     let fits: Vec<(PoseFit, Option<pose_fit::ScanMinimum>)> = far
         .into_iter()
