@@ -13,7 +13,7 @@ use trajdrift::evaluate;
 use trajdrift::report::json::Report;
 use trajdrift::simulate::motion::Segment;
 use trajdrift::simulate::{default_route, simulate, ClockStep, Mission, MissionConfig};
-use trajdrift::{EvalConfig, NamedInput};
+use trajdrift::{evaluate_trajectories, read, EvalConfig, NamedInput, Parameters, ReadOptions};
 
 /// Times in seconds from the mission start (reference clock for the reference, the estimate's own
 /// clock for the estimate) and positions.
@@ -549,6 +549,107 @@ fn real_recordings_are_constant() {
             );
         }
         assert!(!has_clock_warning(&rep), "{name}: {:?}", rep.warnings);
+    }
+}
+
+/// The shifts `real_runs_shifted_move_the_offset_by_the_shift` moves each real estimate's stamps by,
+/// seconds: back and forth, a few frames and a few seconds (the clock offsets of unsynchronised
+/// recorders), none a whole number of any run's sample periods (the samples do not line up again).
+const REAL_SHIFTS_S: [f64; 3] = [-0.7513, 0.4127, 1.9031];
+
+/// Acceptance: a real run's estimate with every stamp moved by a known shift s comes back with its
+/// clock offset moved by exactly −s (the estimate's stamps plus Δt are the reference's clock), to
+/// within 10 ms, still one constant clock and no clock warning. The runs of
+/// `real_recordings_are_constant` from their text files and recordings, read once each; only the
+/// estimate's stamps differ between the evaluations, so what the test measures is whether the
+/// offset follows the data and not the stamps' origin or the search's grid.
+#[test]
+fn real_runs_shifted_move_the_offset_by_the_shift() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let evo = shared.join("evo-data");
+    let mut options = ReadOptions::default();
+    options.text.kitti_times = Some(evo.join("KITTI_00_gt_times.txt"));
+    let file = |f: &str| {
+        read(&[evo.join(f)], None, &options)
+            .unwrap_or_else(|e| panic!("{f}: {e}"))
+            .named()
+    };
+    let topic = |rec: &str, t: &str| {
+        read(&[evo.join(rec)], Some(t), &options)
+            .unwrap_or_else(|e| panic!("{rec} {t}: {e}"))
+            .named()
+    };
+    let runs = [
+        ("V102", file("V102_groundtruth.csv"), file("V102.txt")),
+        (
+            "fr1_xyz",
+            file("freiburg1_xyz-groundtruth.txt"),
+            file("freiburg1_xyz-rgbdslam.txt"),
+        ),
+        (
+            "fr2_desk",
+            file("fr2_desk_groundtruth.txt"),
+            file("fr2_desk_ORB.txt"),
+        ),
+        (
+            "KITTI 00 ORB",
+            file("KITTI_00_gt.txt"),
+            file("KITTI_00_ORB.txt"),
+        ),
+        (
+            "KITTI 00 S-PTAM",
+            file("KITTI_00_gt.txt"),
+            file("KITTI_00_SPTAM.txt"),
+        ),
+        (
+            "ROS example ORB-SLAM",
+            topic("ROS_example.bag", "groundtruth"),
+            topic("ROS_example.bag", "ORB-SLAM"),
+        ),
+        (
+            "ROS example S-PTAM",
+            topic("ROS_example.bag", "groundtruth"),
+            topic("ROS_example.bag", "S-PTAM"),
+        ),
+        (
+            "nav2 amcl / odom",
+            topic("nav2_turtlebot.mcap", "/amcl_pose"),
+            topic("nav2_turtlebot.mcap", "/odom"),
+        ),
+    ];
+    for (name, reference, estimate) in runs {
+        let offset = |shift_s: f64| {
+            let mut moved = estimate.clone();
+            moved.trajectory = moved.trajectory.shifted((shift_s * 1e9).round() as i64);
+            let rep = evaluate_trajectories(reference.clone(), vec![moved], &Parameters::default())
+                .unwrap_or_else(|e| panic!("{name} shifted {shift_s:+} s: {e}"));
+            let o = &rep.estimates[0].time_offset;
+            assert!(
+                o.model.is_none() || o.model == Some(OffsetModel::Constant),
+                "{name} shifted {shift_s:+} s: {:?}",
+                o.model_reason
+            );
+            assert!(
+                !has_clock_warning(&rep),
+                "{name} shifted {shift_s:+} s: {:?}",
+                rep.warnings
+            );
+            o.offset_s
+        };
+        let base_s = offset(0.0);
+        for shift_s in REAL_SHIFTS_S {
+            let moved_s = offset(shift_s);
+            println!(
+                "{name}: Δt {base_s:+.4} s; stamps {shift_s:+} s → Δt {moved_s:+.4} s, moved {:+.2} ms from −shift",
+                1e3 * (base_s - moved_s - shift_s)
+            );
+            assert!(
+                (base_s - moved_s - shift_s).abs() <= 0.010,
+                "{name}: stamps moved {shift_s:+} s, Δt {base_s:+.4} → {moved_s:+.4} s"
+            );
+        }
     }
 }
 
