@@ -21,9 +21,12 @@
 //! and R̂ are interpolated by the cubic through the four samples around each time, which follows a
 //! gait's sway sampled at 10 Hz where a straight line would shift its phase (`sampler.rs`; the line
 //! beside a jump or a gap; gaps longer than the largest gap are not bridged). What lies near a slow
-//! estimate's Nyquist frequency no interpolation follows: at estimate rates up to
-//! [`AVERAGE_BELOW_HZ`], the reference's samples and their predictions are averaged over two of
-//! the estimate's periods before they are compared, which takes that band out of both sides alike.
+//! estimate's Nyquist frequency the cubic does not follow: at estimate rates up to
+//! [`AVERAGE_BELOW_HZ`], against a reference at least as dense, the reference's samples and their
+//! predictions are averaged over two of the estimate's periods before they are compared, which
+//! takes that band out of both sides alike; against a sparser reference, which nothing can average,
+//! the estimate is interpolated through twelve samples instead of four, which follow that band
+//! much further in phase (`sampler.rs`).
 //! Where the estimate jumps ([`crate::align::jumps`]: a localiser correcting itself), each side of
 //! the jump within a window has its own similarity and drift (the sides share only θ and D), and
 //! the points whose interpolation would reach across the jump are left out. A window's scale is
@@ -142,7 +145,8 @@ pub const NARROW_JACOBIAN_PERIODS: f64 = 1.0;
 /// zero at the same place): nothing at the estimate's Nyquist, 0.31 at 0.4·f_e, 0.81 at 0.2·f_e (a
 /// 2 Hz sway at 10 Hz). The band the estimate cannot represent leaves both sides; the gait's
 /// fundamental stays. Where the reference is sparser than the estimate it already aliases the gait
-/// and nothing is averaged. At 20 Hz and above the gait lies where the cubic follows it and the
+/// and nothing is averaged; at these rates the estimate is then interpolated through twelve samples
+/// (`sampler::LONG_TAPS`). At 20 Hz and above the gait lies where the cubic follows it and the
 /// mean only costs resolution (walking robots at 20/20 Hz: median error 0.46 → 0.63 ms), so it is
 /// not taken there. The instruments of neighbours in a block share a few of the estimate's samples
 /// with their points (see `window.rs`), a bias of order σ_e²/(2h·v²) with σ_e the estimate's noise

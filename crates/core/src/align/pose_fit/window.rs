@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, Vector3};
 
 use crate::stats::median_step;
 
-use super::sampler::{At, Sampler};
+use super::sampler::{At, Sampler, Taps};
 use super::{ClockShape, PoseData, DRIFT_PRIOR_M2S2, MIN_WINDOW_SAMPLES, WINDOW_S};
 
 /// The half-step h of the instrument's central differences: one of the estimate's periods, at
@@ -56,7 +56,8 @@ pub(super) struct Terms {
     /// they share samples where h is a whole number of periods: see [`STENCIL_MIN_S`]); h = Σ v·v
     /// (the formal σ's middle); j = Σ v·w with w the same derivative over two of the estimate's
     /// periods more (`PoseFitParams::jacobian_periods`; one where the fit cannot be made with
-    /// two), mostly other samples than v's (the cubics at the ends share one or two): the Newton
+    /// two), mostly other samples than v's (the cubics at the ends share one or two; the long
+    /// interpolation's more, which can slow the steps but does not move the root g = 0): the Newton
     /// Jacobian of g, nearly free of the bias Σ v·v takes from v's noise, which steps the
     /// fits (the error bar measures the clock columns instead: `SharedFit::jacobians`). The
     /// window's similarity and drift eliminated (Schur complement).
@@ -797,15 +798,23 @@ impl<'a> PoseData<'a> {
         let ref_period_s = median_step(self.ref_t).unwrap_or(f64::INFINITY);
         // Two of the estimate's periods of reference samples, where the estimate is slow enough
         // for a gait to reach its Nyquist band and the reference samples it more densely.
-        let block = if period * self.params.average_below_hz >= 1.0 && ref_period_s > 0.0 {
+        let slow = period * self.params.average_below_hz >= 1.0;
+        let block = if slow && ref_period_s > 0.0 {
             (2.0 * period / ref_period_s).round().clamp(1.0, 1e6) as usize
         } else {
             1
         };
+        // Where a slow estimate's reference is sparser, nothing is averaged: the long
+        // interpolation follows the band near the estimate's Nyquist frequency instead.
+        let taps = if slow && block == 1 {
+            Taps::Long
+        } else {
+            Taps::Cubic
+        };
         Problem {
             ref_t: self.ref_t,
             ref_p: self.ref_p,
-            sampler: Sampler::new(self.estimate, self.params.max_gap_s),
+            sampler: Sampler::new(self.estimate, self.params.max_gap_s, taps),
             h: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S),
             hw: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S) + self.params.jacobian_periods * period,
             scale_prior_m: self.params.scale_prior_m,
