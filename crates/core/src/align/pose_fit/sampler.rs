@@ -133,26 +133,13 @@ impl<'a> Sampler<'a> {
         if span > self.gap || span <= 0.0 {
             return None;
         }
-        let (p, r) = (self.track.p, &self.rotations);
         if self.taps == Taps::Long {
-            if let Some((k, w)) = self.long_weights(t, a) {
-                let mut at = At {
-                    p: p[k] * w[0],
-                    r: r[k] * w[0],
-                };
-                for (i, &wi) in w.iter().enumerate().skip(1) {
-                    at.p += p[k + i] * wi;
-                    at.r += r[k + i] * wi;
-                }
+            if let Some(at) = self.through::<LONG_TAPS>(t, a, LONG_STEP_RATIO) {
                 return Some(at);
             }
         }
-        if let Some(w) = self.cubic_weights(t, a) {
-            let k = a - 1;
-            return Some(At {
-                p: p[k] * w[0] + p[k + 1] * w[1] + p[k + 2] * w[2] + p[k + 3] * w[3],
-                r: r[k] * w[0] + r[k + 1] * w[1] + r[k + 2] * w[2] + r[k + 3] * w[3],
-            });
+        if let Some(at) = self.through::<4>(t, a, MAX_STEP_RATIO) {
+            return Some(at);
         }
         let f = (t - ts[a]) / span;
         let (ra, rb) = (self.rotations[a], self.rotations[b]);
@@ -162,40 +149,39 @@ impl<'a> Sampler<'a> {
         })
     }
 
-    /// Lagrange's weights of samples a − 1 … a + 2 at `t` (between samples a and a + 1), `None`
-    /// where the cubic does not apply (see the module doc).
-    fn cubic_weights(&self, t: f64, a: usize) -> Option<[f64; 4]> {
-        if a == 0 || a + 2 >= self.track.t.len() || !self.joined[a - 1..=a + 1].iter().all(|&j| j) {
+    /// The pose at `t` (between samples a and a + 1) by Lagrange's polynomial through the N
+    /// samples around it, N/2 each side (the cubic's four, or [`LONG_TAPS`]); `None` unless they
+    /// lie in one stretch and every step is within `ratio` of the middle one (for the cubic: its
+    /// two outer steps; see the module doc).
+    fn through<const N: usize>(&self, t: f64, a: usize, ratio: f64) -> Option<At> {
+        let half = N / 2;
+        if a + 1 < half || a + half >= self.track.t.len() {
             return None;
         }
-        let x: [f64; 4] = std::array::from_fn(|i| self.track.t[a - 1 + i]);
-        let mid = x[2] - x[1];
-        let outer_ok = |s: f64| s <= MAX_STEP_RATIO * mid && s * MAX_STEP_RATIO >= mid;
-        if !outer_ok(x[1] - x[0]) || !outer_ok(x[3] - x[2]) {
+        let k = a + 1 - half;
+        if !self.joined[k..k + N - 1].iter().all(|&j| j) {
             return None;
         }
-        Some(lagrange_weights(&x, t))
-    }
-
-    /// The first of the [`LONG_TAPS`] samples around `t` (half each side of the step a → a + 1)
-    /// and their Lagrange weights, `None` unless they lie in one stretch and every step is within
-    /// [`LONG_STEP_RATIO`] of the middle one.
-    fn long_weights(&self, t: f64, a: usize) -> Option<(usize, [f64; LONG_TAPS])> {
-        const HALF: usize = LONG_TAPS / 2;
-        if a + 1 < HALF || a + HALF >= self.track.t.len() {
-            return None;
-        }
-        let k = a + 1 - HALF;
-        if !self.joined[k..k + LONG_TAPS - 1].iter().all(|&j| j) {
-            return None;
-        }
-        let x: [f64; LONG_TAPS] = std::array::from_fn(|i| self.track.t[k + i]);
-        let mid = x[HALF] - x[HALF - 1];
+        let x: [f64; N] = std::array::from_fn(|i| self.track.t[k + i]);
+        let mid = x[half] - x[half - 1];
         let even = x.windows(2).all(|s| {
             let step = s[1] - s[0];
-            step <= LONG_STEP_RATIO * mid && step * LONG_STEP_RATIO >= mid
+            step <= ratio * mid && step * ratio >= mid
         });
-        even.then(|| (k, lagrange_weights(&x, t)))
+        if !even {
+            return None;
+        }
+        let w = lagrange_weights(&x, t);
+        let (p, r) = (self.track.p, &self.rotations);
+        let mut at = At {
+            p: p[k] * w[0],
+            r: r[k] * w[0],
+        };
+        for i in 1..N {
+            at.p += p[k + i] * w[i];
+            at.r += r[k + i] * w[i];
+        }
+        Some(at)
     }
 
     /// The stretch of the track between jumps that `[t − reach, t + reach]` (estimate clock) lies
