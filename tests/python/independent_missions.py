@@ -33,7 +33,8 @@ acceptance asks of constant clocks (the |error| median and worst, the share 2σ 
 errors were only its white residuals' would leave there). Mission k of a kind in seed set S has the seed
 1000·S + 100·(the kind's index) + k. `--only vehicles` (or `walking`) grades those robots alone;
 `--without heading-drift bias-wander` leaves those error sources out of the same missions, to
-measure what they cost. `--long-levers` mounts the estimate's sensor 0.6–0.9 m ahead of or behind
+measure what they cost (`ref-jitter`, `est-jitter`: a receipt-stamped stream's latency held at its
+mean); `--kinds receipt` draws those kinds alone. `--long-levers` mounts the estimate's sensor 0.6–0.9 m ahead of or behind
 the body's centre instead (the other draws the same): beyond the 0.5 m a walking robot's lead search
 allows for; `--give-levers` passes each mission's true levers (`--estimate-lever`,
 `--reference-lever`), as a user who knows them would. Needs NumPy.
@@ -94,8 +95,9 @@ def sinusoids(rng, t, n, f_lo, f_hi, amp):
 
 def mission(kind, seed, without=(), long_lever=False):
     """One mission of `kind`; `without` names error sources to leave out ("heading-drift": the
-    estimate's heading random walk, "bias-wander": the reference's wandering bias), each drawn and
-    then zeroed, so that every other draw of the seed stays the same. `long_lever`: the estimate's
+    estimate's heading random walk, "bias-wander": the reference's wandering bias, "ref-jitter" and
+    "est-jitter": a receipt stamp's latency about its mean, the stream stamped at its mean latency),
+    each drawn and then zeroed, so that every other draw of the seed stays the same. `long_lever`: the estimate's
     sensor 0.6–0.9 m ahead or behind (drawn apart, every other draw the same)."""
     rng = np.random.default_rng(seed)
     legged = kind in ("legged", "turns") or (kind in ("outages", "receipt") and rng.random() < 0.5)
@@ -181,7 +183,8 @@ def mission(kind, seed, without=(), long_lever=False):
     if "bias-wander" in without:
         bias[:] = 0.0
     ref = at(ref_point, t_ref) + bias + noise_m * rng.standard_normal((len(t_ref), 3))
-    stamps_ref = t_ref + (rng.exponential(lat_ref, len(t_ref)) if lat_ref else 0.0)
+    late_ref = rng.exponential(lat_ref, len(t_ref)) if lat_ref else 0.0
+    stamps_ref = t_ref + (lat_ref if "ref-jitter" in without else late_ref)
 
     # The estimate: its velocity rotated by a heading random walk, scaled, integrated. The velocity
     # is the backward difference, so that the sum up to a sample is the point at that sample (a
@@ -201,7 +204,8 @@ def mission(kind, seed, without=(), long_lever=False):
     est = at(est_pos, t_est) + 0.002 * rng.standard_normal((len(t_est), 3))
     tilt = rot_x(np.radians(0.2) * rng.standard_normal(len(t_est))) @ rot_y(np.radians(0.2) * rng.standard_normal(len(t_est)))
     q_est = quaternion(est_rot[idx] @ tilt)
-    stamps_est = t_est - offset_s + (rng.exponential(lat_est, len(t_est)) if lat_est else 0.0)
+    late_est = rng.exponential(lat_est, len(t_est)) if lat_est else 0.0
+    stamps_est = t_est - offset_s + (lat_est if "est-jitter" in without else late_est)
     # Stamps on a large epoch, as recorders write them; both streams in time order.
     epoch = 1.7e9
     order_ref = np.argsort(stamps_ref, kind="stable")
@@ -276,11 +280,12 @@ def main():
     ap.add_argument("--seed", type=int, nargs="+", default=[1], help="one or more seed sets")
     ap.add_argument("--keep", metavar="DIR", help="keep each mission's TUM files and truth in DIR")
     ap.add_argument("--only", choices=["vehicles", "walking"], help="grade only these robots")
+    ap.add_argument("--kinds", nargs="+", choices=KINDS, default=KINDS, help="draw only these kinds (the seeds stay the same)")
     ap.add_argument(
         "--without",
         nargs="+",
         default=[],
-        choices=["heading-drift", "bias-wander"],
+        choices=["heading-drift", "bias-wander", "ref-jitter", "est-jitter"],
         help="leave these error sources out (what limits the answers: the other draws stay the same)",
     )
     ap.add_argument("--long-levers", action="store_true", help="the estimate's sensor 0.6–0.9 m ahead or behind")
@@ -288,7 +293,7 @@ def main():
     args = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as workdir:
-        for kind, seed in mission_seeds(args.seed, args.missions):
+        for kind, seed in mission_seeds(args.seed, args.missions, args.kinds):
             ref, est, info = mission(kind, seed, args.without, args.long_levers)
             if args.only and info["legged"] != (args.only == "walking"):
                 continue

@@ -15,13 +15,13 @@
 //! while it lowers the BIC by [`BIC_MARGIN`]; at most [`MAX_STEPS`]); a segment spans at least two
 //! independent windows, so a position jump, which spoils a window or two, is not a step; and the two
 //! sides must differ by the step resolution, the drift's rule ([`SLOW_ERROR_FACTOR`]·z·σ of their
-//! difference), unless the profile is a first look ([`Steps::Provisional`]). The change
-//! time is then located on the data themselves, to a few seconds: on the positions when the pose fit
-//! made the profile ([`crate::align::pose_fit::locate_change`]), else on the signals
+//! difference), unless the profile is a first look ([`Steps::Provisional`]). The change time is
+//! then located on the data themselves, to a few seconds: on the positions when the pose fit made
+//! the profile ([`crate::align::pose_fit::locate_change`]), else on the signals
 //! ([`locate_change`]); two changes less than a window apart are one step (`piecewise_segments`).
-//! Steps that go out and back (a segment returning to the offset two
-//! segments before it, `steps_out_and_back`) are read as two basins of the fit, not a clock: the
-//! model is `constant`, its σ covering both (`alternation_s`).
+//! Steps that go out and back (a segment returning to the offset two segments before it,
+//! `steps_out_and_back`) are read as two basins of the fit, not a clock: the model is `constant`,
+//! its σ covering both (`alternation_s`).
 //!
 //! **The signal searches' constant** (a clock model from the speed or curvature profile, not the
 //! pose fit) keeps the whole mission's answer, one correlation over every sample, with σ the
