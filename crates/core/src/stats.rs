@@ -106,6 +106,31 @@ pub fn median_step(t: &[f64]) -> Option<f64> {
     Some(*steps.select_nth_unstable_by(mid, f64::total_cmp).1)
 }
 
+/// How far the stamps `t` of a stream sampled every `period` seconds stray from an even grid,
+/// seconds: the σ of each stamp's own error, estimated robustly from the consecutive steps (each
+/// step's error is the difference of two stamps' errors, σ·√2; 1.4826 × their median absolute
+/// deviation from `period` estimates that σ for normal errors, and 0.73 of the mean latency for
+/// exponential ones, stamps taken at receipt). A dropped sample, a step of two periods, moves the
+/// median no more than any other outlier. 0 with fewer than two times.
+///
+/// ```
+/// use trajdrift_core::stats::stamp_jitter_s;
+/// let even: Vec<f64> = (0..100).map(|i| i as f64 * 0.02).collect();
+/// assert!(stamp_jitter_s(&even, 0.02) < 1e-12);
+/// // Every other stamp 4 ms late: each step is 4 ms off; σ of a stamp 4·1.4826/√2 ≈ 4.2 ms.
+/// let late: Vec<f64> = (0..100).map(|i| i as f64 * 0.02 + if i % 2 == 1 { 0.004 } else { 0.0 }).collect();
+/// assert!((stamp_jitter_s(&late, 0.02) - 0.004 * 1.4826 / 2f64.sqrt()).abs() < 1e-9);
+/// assert_eq!(stamp_jitter_s(&[1.0], 0.02), 0.0);
+/// ```
+pub fn stamp_jitter_s(t: &[f64], period: f64) -> f64 {
+    let mut dev: Vec<f64> = t.windows(2).map(|w| (w[1] - w[0] - period).abs()).collect();
+    if dev.is_empty() {
+        return 0.0;
+    }
+    let mid = dev.len() / 2;
+    1.4826 * *dev.select_nth_unstable_by(mid, f64::total_cmp).1 / std::f64::consts::SQRT_2
+}
+
 /// The `q` quantile (0 ≤ q ≤ 1) of sorted, non-empty `v`, linear between closest ranks (numpy default).
 pub fn quantile_sorted(v: &[f64], q: f64) -> f64 {
     let h = (v.len() - 1) as f64 * q.clamp(0.0, 1.0);

@@ -573,7 +573,7 @@ impl SharedFit<'_> {
                 let t = t.as_ref()?;
                 let mut j = t.j.clone();
                 for i in 0..m {
-                    let Some(step) = self.probe_step(w, i) else {
+                    let Some(step) = self.probe_step(w, i, self.problem.probe_s()) else {
                         continue; // Δt in this window does not depend on θ_i.
                     };
                     let at = |sign: f64| {
@@ -603,24 +603,25 @@ impl SharedFit<'_> {
         Jacobians { own, whole }
     }
 
-    /// The shift of clock parameter `i` that moves Δt by half the instrument's half-step at most
-    /// within window `w` (a linear drift's slope by that over the window's farthest end from the
-    /// mid); `None` when Δt in the window does not depend on θ_i (another segment's offset).
-    /// Half the instrument's half-step (25 ms at 20 Hz and above, 50 ms at 10 Hz, 125 ms below
-    /// 4 Hz): over less than an estimate's period the equations are rough — the instrument's
+    /// The shift of clock parameter `i` that moves Δt by `half_width_s` at most within window `w`
+    /// (a linear drift's slope by that over the window's farthest end from the mid); `None` when
+    /// Δt in the window does not depend on θ_i (another segment's offset). The slopes are measured
+    /// over the problem's probe: half the instrument's half-step (25 ms at 20 Hz and above, 50 ms
+    /// at 10 Hz, 125 ms below 4 Hz), wider where the estimate's stamps jitter
+    /// ([`super::PROBE_JITTERS`]): over less than an estimate's period the equations are rough — the instrument's
     /// change with Δt is the interpolated track's local slope, mostly the estimate's noise at
     /// 100–200 Hz, and against the reference's noise in the residual it flattened the slope
     /// measured over ±2 ms to a quarter of its value over ±10 ms or more (σ 0.35 s on a turn in
     /// place whose Δt was within 0.1 ms, in a trial); a gait at 2–3.5 Hz keeps 90 % of its slope
     /// over ±25 ms.
-    fn probe_step(&self, w: &Window, i: usize) -> Option<f64> {
+    fn probe_step(&self, w: &Window, i: usize, half_width_s: f64) -> Option<f64> {
         let mut phi = vec![0.0; self.m];
         let mut reach = 0.0f64;
         for t in [w.t_start, w.t_end] {
             self.shape.basis(t, &mut phi);
             reach = reach.max(phi[i].abs());
         }
-        (reach > 0.0).then(|| 0.5 * self.problem.half_step_s() / reach)
+        (reach > 0.0).then(|| half_width_s / reach)
     }
 
     /// The lever's prior (weight `l`, on the lever's diagonal) added to a summed Jacobian or H.
@@ -656,7 +657,8 @@ impl SharedFit<'_> {
     /// `None` when fewer than three windows could be left out.
     ///
     /// A step is a linear prediction from slopes measured over ± [`Self::probe_step`]; where it
-    /// moves a clock parameter beyond that, it extrapolates, and where the window's measured slopes
+    /// moves a clock parameter beyond half the instrument's half-step (an evenly stamped
+    /// estimate's probe), it extrapolates, and where the window's measured slopes
     /// carry much of S along some direction, S − S_k is near-singular and the step runs away
     /// (while the fit without the window may hardly move). That window's fit without it is then
     /// made in full (Gauss–Newton from `x`; the
@@ -679,10 +681,14 @@ impl SharedFit<'_> {
         if deltas.len() < 3 {
             return None;
         }
-        // How far beyond its probe step each step moves a clock parameter (> 1: beyond).
+        // How far beyond half the instrument's half-step each step moves a clock parameter (> 1:
+        // beyond). Not the probe where a jittered estimate's is wider: its slopes, measured over a
+        // wider shift for their noise, do not make a longer step linear (a window where a vehicle
+        // nearly stops ran away as before; the test of the runaway window).
+        let linear_s = 0.5 * self.problem.half_step_s();
         let reach = |k: usize, d: &DVector<f64>| {
             (0..self.m)
-                .filter_map(|i| Some(d[i].abs() / self.probe_step(&self.windows[k], i)?))
+                .filter_map(|i| Some(d[i].abs() / self.probe_step(&self.windows[k], i, linear_s)?))
                 .fold(0.0, f64::max)
         };
         let mut beyond: Vec<(usize, f64)> = deltas

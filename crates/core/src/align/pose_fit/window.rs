@@ -8,10 +8,10 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, Vector3};
 
-use crate::stats::median_step;
+use crate::stats::{median_step, stamp_jitter_s};
 
 use super::sampler::{At, Sampler, Taps};
-use super::{ClockShape, PoseData, DRIFT_PRIOR_M2S2, MIN_WINDOW_SAMPLES, WINDOW_S};
+use super::{ClockShape, PoseData, DRIFT_PRIOR_M2S2, MIN_WINDOW_SAMPLES, PROBE_JITTERS, WINDOW_S};
 
 /// The half-step h of the instrument's central differences: one of the estimate's periods, at
 /// least 50 ms (a difference over shorter times is mostly the estimate's noise: 3 mm of noise over
@@ -95,6 +95,10 @@ pub(super) struct Problem<'a> {
     /// reference's median period, seconds.
     block: usize,
     ref_period_s: f64,
+    /// The half-width over which the error bar measures the equations' slope in Δt, seconds: half
+    /// the instrument's half-step, or [`PROBE_JITTERS`] times the estimate's stamp jitter where
+    /// that is wider ([`Problem::probe_s`]).
+    probe_s: f64,
     /// Gauss–Newton iterations at most ([`super::PoseFitParams::max_iterations`]).
     max_iterations: usize,
 }
@@ -277,6 +281,14 @@ impl Problem<'_> {
     /// The instrument's half-step h, seconds (see [`STENCIL_MIN_S`]).
     pub(super) fn half_step_s(&self) -> f64 {
         self.h
+    }
+
+    /// The half-width of the shift of Δt over which the error bar measures the equations' slope,
+    /// seconds: half the instrument's half-step (25 ms at 20 Hz and above, 50 ms at 10 Hz, 125 ms
+    /// below 4 Hz), widened to [`PROBE_JITTERS`] times the estimate's stamp jitter where that is
+    /// more (see [`PROBE_JITTERS`]).
+    pub(super) fn probe_s(&self) -> f64 {
+        self.probe_s
     }
 
     /// Window `w`'s residual at the constant offset `offset_s` with the lever `d`: the mean squared
@@ -811,12 +823,15 @@ impl<'a> PoseData<'a> {
         } else {
             Taps::Cubic
         };
+        let h = period.clamp(STENCIL_MIN_S, STENCIL_MAX_S);
+        let probe_s = (0.5 * h).max(PROBE_JITTERS * stamp_jitter_s(self.estimate.t, period));
         Problem {
             ref_t: self.ref_t,
             ref_p: self.ref_p,
             sampler: Sampler::new(self.estimate, self.params.max_gap_s, taps),
-            h: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S),
-            hw: period.clamp(STENCIL_MIN_S, STENCIL_MAX_S) + self.params.jacobian_periods * period,
+            h,
+            hw: h + self.params.jacobian_periods * period,
+            probe_s,
             scale_prior_m: self.params.scale_prior_m,
             block,
             ref_period_s,
