@@ -608,8 +608,9 @@ impl SharedFit<'_> {
     /// Δt in the window does not depend on θ_i (another segment's offset). The slopes are measured
     /// over the problem's probe: half the instrument's half-step (25 ms at 20 Hz and above, 50 ms
     /// at 10 Hz, 125 ms below 4 Hz), wider where the estimate's stamps jitter
-    /// ([`super::PROBE_JITTERS`]): over less than an estimate's period the equations are rough — the instrument's
-    /// change with Δt is the interpolated track's local slope, mostly the estimate's noise at
+    /// ([`super::PROBE_JITTERS`]): over less than an estimate's period the equations are rough —
+    /// the instrument's change with Δt is the interpolated track's local slope, mostly the
+    /// estimate's noise at
     /// 100–200 Hz, and against the reference's noise in the residual it flattened the slope
     /// measured over ±2 ms to a quarter of its value over ±10 ms or more (σ 0.35 s on a turn in
     /// place whose Δt was within 0.1 ms, in a trial); a gait at 2–3.5 Hz keeps 90 % of its slope
