@@ -167,3 +167,25 @@ def test_a_drift_the_windows_chose_a_lead_away_is_questioned_by_the_lead_search(
     error_s, what = applied_pose_error(o, info)
     assert o["status"] == "ok" and o["model"] == "constant", what
     assert abs(error_s) <= 0.01 and abs(error_s) <= 3 * o["sigma_s"] <= 0.02, what
+
+
+def test_the_heading_walk_options_change_the_walk_alone():
+    # `--walk-scale`, `--walk-slower-than` and `--walk-into` (what the walk costs, by size, period
+    # and side): every other draw of the seed stays the same. No walk is `--without heading-drift`;
+    # the walk in one side of the estimate leaves the other as without it.
+    import numpy as np
+
+    sim = independent_missions()
+    kind, seed = "outages", 146407
+    _, (t0, p0, q0), _ = sim.mission(kind, seed)
+    _, (tn, pn, qn), _ = sim.mission(kind, seed, without=("heading-drift",))
+    _, (tz, pz, qz), _ = sim.mission(kind, seed, walk=(0.0, None, "both"))
+    assert np.array_equal(tz, tn) and np.array_equal(pz, pn) and np.array_equal(qz, qn)
+    _, (tp, pp, qp), _ = sim.mission(kind, seed, walk=(1.0, None, "positions"))
+    assert np.array_equal(pp, p0) and np.array_equal(qp, qn)
+    _, (ta, pa, qa), _ = sim.mission(kind, seed, walk=(1.0, None, "attitude"))
+    assert np.array_equal(pa, pn) and np.array_equal(qa, q0)
+    # Only the walk's slow content: nearer the drawn walk's positions than no walk, not the same.
+    _, (ts, ps, qs), _ = sim.mission(kind, seed, walk=(1.0, 40.0, "both"))
+    assert np.array_equal(ts, t0)
+    assert 0.0 < np.abs(ps - p0).max() < np.abs(pn - p0).max()

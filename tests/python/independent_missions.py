@@ -34,7 +34,9 @@ errors were only its white residuals' would leave there). Mission k of a kind in
 1000·S + 100·(the kind's index) + k. `--only vehicles` (or `walking`) grades those robots alone;
 `--without heading-drift bias-wander` leaves those error sources out of the same missions, to
 measure what they cost (`ref-jitter`, `est-jitter`: a receipt-stamped stream's latency held at its
-mean); `--kinds receipt` draws those kinds alone. `--long-levers` mounts the estimate's sensor 0.6–0.9 m ahead of or behind
+mean); `--walk-scale F`, `--walk-slower-than S` and `--walk-into positions|attitude` scale
+the heading walk, keep only its content slower than S seconds, or put it in one side of the
+estimate alone; `--kinds receipt` draws those kinds alone. `--long-levers` mounts the estimate's sensor 0.6–0.9 m ahead of or behind
 the body's centre instead (the other draws the same): beyond the 0.5 m a walking robot's lead search
 allows for; `--give-levers` passes each mission's true levers (`--estimate-lever`,
 `--reference-lever`), as a user who knows them would. Needs NumPy.
@@ -93,12 +95,16 @@ def sinusoids(rng, t, n, f_lo, f_hi, amp):
     return out
 
 
-def mission(kind, seed, without=(), long_lever=False):
+def mission(kind, seed, without=(), long_lever=False, walk=(1.0, None, "both")):
     """One mission of `kind`; `without` names error sources to leave out ("heading-drift": the
     estimate's heading random walk, "bias-wander": the reference's wandering bias, "ref-jitter" and
     "est-jitter": a receipt stamp's latency about its mean, the stream stamped at its mean latency),
     each drawn and then zeroed, so that every other draw of the seed stays the same. `long_lever`: the estimate's
-    sensor 0.6–0.9 m ahead or behind (drawn apart, every other draw the same)."""
+    sensor 0.6–0.9 m ahead or behind (drawn apart, every other draw the same). `walk`: the heading
+    random walk as drawn, then (scale, slower_than_s, into): times `scale`; only its content slower
+    than `slower_than_s` seconds (a moving average over that span; None: all of it); in the
+    estimate's positions and attitude ("both"), its "positions" only (the attitude the body's) or
+    its "attitude" only (the positions without it)."""
     rng = np.random.default_rng(seed)
     legged = kind in ("legged", "turns") or (kind in ("outages", "receipt") and rng.random() < 0.5)
     duration = rng.uniform(480.0, 900.0)
@@ -194,11 +200,18 @@ def mission(kind, seed, without=(), long_lever=False):
     heading_err = np.cumsum(rng.standard_normal(len(t)) * rng.uniform(0.0005, 0.002) * math.sqrt(dt))
     if "heading-drift" in without:
         heading_err[:] = 0.0
+    walk_scale, slower_than_s, walk_into = walk
+    heading_err = heading_err * walk_scale
+    if slower_than_s:
+        span = max(1, int(round(slower_than_s * FINE_HZ)))
+        padded = np.concatenate([np.full(span, heading_err[0]), heading_err, np.full(span, heading_err[-1])])
+        heading_err = np.convolve(padded, np.ones(span) / span, mode="same")[span:-span]
     scale = 1.0 + rng.choice([-1, 1]) * rng.uniform(0.01, 0.03)
     drift_rot = rot_z(heading_err)
-    est_pos = np.cumsum(np.einsum("nij,nj->ni", drift_rot, est_vel) * scale, axis=0) * dt
+    pos_rot = drift_rot if walk_into != "attitude" else rot_z(np.zeros_like(heading_err))
+    est_pos = np.cumsum(np.einsum("nij,nj->ni", pos_rot, est_vel) * scale, axis=0) * dt
     est_pos += rng.uniform(-50, 50, 3)
-    est_rot = drift_rot @ rot
+    est_rot = drift_rot @ rot if walk_into != "positions" else rot
     t_est = np.arange(rng.uniform(0.0, 1.0), duration - 0.5, 1.0 / est_hz)
     idx = np.clip(np.round(t_est * FINE_HZ).astype(int), 0, len(t) - 1)
     est = at(est_pos, t_est) + 0.002 * rng.standard_normal((len(t_est), 3))
@@ -288,13 +301,22 @@ def main():
         choices=["heading-drift", "bias-wander", "ref-jitter", "est-jitter"],
         help="leave these error sources out (what limits the answers: the other draws stay the same)",
     )
+    ap.add_argument("--walk-scale", type=float, default=1.0, help="the estimate's heading random walk times this")
+    ap.add_argument("--walk-slower-than", type=float, metavar="S", help="only the heading walk's content slower than S seconds")
+    ap.add_argument(
+        "--walk-into",
+        choices=["both", "positions", "attitude"],
+        default="both",
+        help="the heading walk in the estimate's positions and attitude, or in one of them",
+    )
     ap.add_argument("--long-levers", action="store_true", help="the estimate's sensor 0.6–0.9 m ahead or behind")
     ap.add_argument("--give-levers", action="store_true", help="pass each mission's true levers to trajdrift")
     args = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as workdir:
         for kind, seed in mission_seeds(args.seed, args.missions, args.kinds):
-            ref, est, info = mission(kind, seed, args.without, args.long_levers)
+            walk = (args.walk_scale, args.walk_slower_than, args.walk_into)
+            ref, est, info = mission(kind, seed, args.without, args.long_levers, walk)
             if args.only and info["legged"] != (args.only == "walking"):
                 continue
             if args.keep:
