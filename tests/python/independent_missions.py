@@ -204,8 +204,11 @@ def mission(kind, seed, without=(), long_lever=False, walk=(1.0, None, "both")):
     heading_err = heading_err * walk_scale
     if slower_than_s:
         span = max(1, int(round(slower_than_s * FINE_HZ)))
+        # The moving average by a running sum (the walk is 10⁵–10⁶ samples, the span up to 10⁵).
         padded = np.concatenate([np.full(span, heading_err[0]), heading_err, np.full(span, heading_err[-1])])
-        heading_err = np.convolve(padded, np.ones(span) / span, mode="same")[span:-span]
+        sums = np.concatenate([[0.0], np.cumsum(padded)])
+        lo = np.arange(len(heading_err)) + span - span // 2
+        heading_err = (sums[lo + span] - sums[lo]) / span
     scale = 1.0 + rng.choice([-1, 1]) * rng.uniform(0.01, 0.03)
     drift_rot = rot_z(heading_err)
     pos_rot = drift_rot if walk_into != "attitude" else rot_z(np.zeros_like(heading_err))
