@@ -211,8 +211,8 @@ def mission(kind, seed, without=(), long_lever=False, walk=(1.0, None, "both")):
         heading_err = (sums[lo + span] - sums[lo]) / span
     scale = 1.0 + rng.choice([-1, 1]) * rng.uniform(0.01, 0.03)
     drift_rot = rot_z(heading_err)
-    pos_rot = drift_rot if walk_into != "attitude" else rot_z(np.zeros_like(heading_err))
-    est_pos = np.cumsum(np.einsum("nij,nj->ni", pos_rot, est_vel) * scale, axis=0) * dt
+    turned = est_vel if walk_into == "attitude" else np.einsum("nij,nj->ni", drift_rot, est_vel)
+    est_pos = np.cumsum(turned * scale, axis=0) * dt
     est_pos += rng.uniform(-50, 50, 3)
     est_rot = drift_rot @ rot if walk_into != "positions" else rot
     t_est = np.arange(rng.uniform(0.0, 1.0), duration - 0.5, 1.0 / est_hz)
