@@ -12,4 +12,5 @@ pub mod merge;
 pub mod run;
 pub mod shard;
 pub mod summary;
+pub mod summary_files;
 pub mod summary_html;

@@ -12,6 +12,7 @@ use super::identity::{BatchLock, Fingerprint, RunRecord, RunStatus};
 use super::manifest::{Manifest, MissionSpec};
 use super::shard::Shard;
 use super::summary::{MissionResult, Summary, Timing, MISSION_KIND};
+use super::summary_files::{self, SUMMARY_STEM};
 use crate::error::{Error, Result};
 use crate::job::{self, JobEvent, JobOutputs, Pass};
 use crate::output::{write_json, OutputGuard};
@@ -189,8 +190,8 @@ pub fn run_batch(
     results.sort_by(|a, b| a.mission.cmp(&b.mission));
     let summary = Summary::build(&results);
     match opts.shard {
-        Some(shard) => summary.write_as(&opts.out_dir, &shard.summary_stem())?,
-        None => summary.write(&opts.out_dir)?,
+        Some(shard) => summary_files::write(&summary, &opts.out_dir, &shard.summary_stem())?,
+        None => summary_files::write(&summary, &opts.out_dir, SUMMARY_STEM)?,
     }
     record.status = RunStatus::Complete;
     write_json(&record_path, &record)?;
@@ -225,12 +226,9 @@ fn claim_outputs(
 ) -> Result<()> {
     let stem = opts
         .shard
-        .map_or_else(|| "summary".to_string(), |s| s.summary_stem());
-    for ext in ["json", "csv", "md", "html"] {
-        guard.claim(
-            "the batch summary",
-            &opts.out_dir.join(format!("{stem}.{ext}")),
-        )?;
+        .map_or_else(|| SUMMARY_STEM.to_string(), |s| s.summary_stem());
+    for path in summary_files::paths(&opts.out_dir, &stem) {
+        guard.claim("the batch summary", &path)?;
     }
     guard.claim(
         "the run record",

@@ -1,18 +1,15 @@
 //! Per-mission results and the summary across missions: for each estimate name (and window size), how
 //! many missions, the median and IQR of the per-mission Drift Error RMSE, and each mission's Δt and
-//! confidence; failed missions with their error. Written as `summary.json`, `summary.csv` and
-//! `summary.md`. Built only from the per-mission results, so `trajdrift merge` over the folders of
+//! confidence; failed missions with their error. Written as `summary.json`, `summary.csv`,
+//! `summary.md` and `summary.html` by [`super::summary_files`]. Built only from the per-mission results, so `trajdrift merge` over the folders of
 //! sharded runs gives the same summary as one run.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
 use super::identity::Fingerprint;
-use crate::error::Result;
-use crate::output::{write_json, write_output};
 use crate::report::escape::{csv_field, markdown};
 use crate::report::json::Report;
 use crate::stats::summarize;
@@ -355,21 +352,6 @@ impl Summary {
             }
         }
         s
-    }
-
-    /// Writes `summary.json`, `summary.csv` and `summary.md` into `dir`.
-    pub fn write(&self, dir: &Path) -> Result<()> {
-        self.write_as(dir, "summary")
-    }
-
-    /// Writes `STEM.json`, `STEM.csv` and `STEM.md` into `dir` (a shard writes its own stem).
-    pub fn write_as(&self, dir: &Path, stem: &str) -> Result<()> {
-        let path = |ext: &str| dir.join(format!("{stem}.{ext}"));
-        write_json(&path("json"), self)?;
-        write_output(&path("csv"), self.to_csv().as_bytes())?;
-        write_output(&path("md"), self.to_markdown().as_bytes())?;
-        let html = super::summary_html::render(self, dir);
-        write_output(&path("html"), html.as_bytes())
     }
 }
 

@@ -6,6 +6,7 @@ use anyhow::Result;
 
 use trajdrift::batch::merge::read_set;
 use trajdrift::batch::summary::Summary;
+use trajdrift::batch::summary_files::{self, SUMMARY_STEM};
 use trajdrift::output::OutputGuard;
 use trajdrift::report::escape::escape;
 
@@ -41,11 +42,11 @@ pub fn run(a: MergeArgs) -> Result<u8> {
     // The summary never replaces a file it was built from.
     let mut guard = OutputGuard::new(&set.files);
     guard.claim_dir("--out", &out)?;
-    for ext in ["json", "csv", "md", "html"] {
-        guard.claim("the summary", &out.join(format!("summary.{ext}")))?;
+    for path in summary_files::paths(&out, SUMMARY_STEM) {
+        guard.claim("the summary", &path)?;
     }
     std::fs::create_dir_all(&out).map_err(|e| trajdrift::Error::output(&out, &e))?;
-    summary.write(&out)?;
+    summary_files::write(&summary, &out, SUMMARY_STEM)?;
     if !a.quiet {
         crate::cli::emit(&summary.to_markdown())?;
     }

@@ -7,6 +7,7 @@ pub mod curvature;
 pub(crate) mod fine_sums;
 pub mod grid;
 pub mod jumps;
+pub mod offset_params;
 pub mod offset_profile;
 pub(crate) mod offset_sigma;
 pub mod pose_fit;

@@ -9,8 +9,8 @@ use std::sync::{Arc, OnceLock};
 use nalgebra::Vector3;
 
 use crate::align::curvature::curvature_signature_each;
+use crate::align::offset_params::{OffsetMethod, OffsetParams};
 use crate::align::speed::speed_profile_each;
-use crate::align::time_offset::{OffsetMethod, OffsetParams};
 use crate::error::{Error, Result};
 
 /// One trajectory's signal for a method: times, values and (speed only) heading rates.

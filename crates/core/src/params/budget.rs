@@ -4,7 +4,7 @@
 //! allocated, so no parameter can abort the process or make it run for hours.
 
 use super::GRID_MIN_S;
-use crate::align::time_offset::COARSE_GRID_S;
+use crate::align::offset_params::COARSE_GRID_S;
 use crate::error::{Error, Result};
 
 /// Memory the offset search may take for its lags and grids.

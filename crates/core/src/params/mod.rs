@@ -27,8 +27,8 @@ pub use value::{
 use crate::align::auto_offset::OffsetRefine;
 use crate::align::clock_model::{ModelChoice, OffsetModel};
 use crate::align::curvature::CurvatureParams;
+use crate::align::offset_params::{OffsetMethod, OffsetParams, COARSE_GRID_S};
 use crate::align::offset_profile::ProfileParams;
-use crate::align::time_offset::{OffsetMethod, OffsetParams, COARSE_GRID_S};
 use crate::error::{Error, Result};
 use crate::metrics::drift_error::DriftParams;
 use crate::metrics::lever::LeverCorrection;

@@ -38,16 +38,10 @@ use crate::simulate::Mission;
 use crate::sources::bag::writer::{BagCompression, BagWriter};
 use crate::trajectory::Trajectory;
 
-/// The INS solution (the `grandtour` preset's reference).
-pub const INS_TOPIC: &str = "/boxi/inertial_explorer/tc/odometry";
-/// The total station's prism position (the `grandtour-prism` preset's reference).
-pub const PRISM_TOPIC: &str = "/boxi/ap20/prism_position";
-/// DLIO lidar-inertial odometry.
-pub const DLIO_TOPIC: &str = "/boxi/dlio/lidar_map_odometry";
-/// The ANYmal state estimator.
-pub const STATE_ESTIMATOR_TOPIC: &str = "/anymal/state_estimator/odometry";
-/// open3d_slam lidar odometry (in the multi-clock layout only).
-pub const OPEN3D_SLAM_TOPIC: &str = "/open3d_slam/odometry";
+pub use crate::simulate::topics::{
+    DLIO_TOPIC, INS_TOPIC, OPEN3D_SLAM_TOPIC, PRISM_TOPIC, STATE_ESTIMATOR_TOPIC,
+};
+
 /// The bulk channel (`bulk_bytes` > 0).
 pub const BULK_TOPIC: &str = "/boxi/hesai/points";
 /// The TF chain that composes the `/tf` edge of `_dlio.bag` with `/tf_static` of `_tf_minimal.bag`.

@@ -10,6 +10,7 @@ pub mod motion;
 pub(crate) mod ros1_definitions;
 pub mod scenario;
 pub mod sources;
+pub mod topics;
 pub mod writer;
 
 use nalgebra::{UnitQuaternion, Vector3};

@@ -19,7 +19,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::simulate::motion::{integrate, state_at, Segment};
-use crate::simulate::{white, ClockStep};
+use crate::simulate::{topics, white, ClockStep};
 use crate::trajectory::Trajectory;
 
 /// A source's clock relative to the reference's (true) clock.
@@ -135,7 +135,7 @@ impl MultiClockConfig {
             sources: vec![
                 spec(
                     "ins",
-                    super::grandtour::INS_TOPIC,
+                    topics::INS_TOPIC,
                     50.0,
                     0.005,
                     d.ins_lever,
@@ -145,7 +145,7 @@ impl MultiClockConfig {
                 ),
                 spec(
                     "dlio",
-                    super::grandtour::DLIO_TOPIC,
+                    topics::DLIO_TOPIC,
                     10.0,
                     0.005,
                     d.dlio_lever,
@@ -158,7 +158,7 @@ impl MultiClockConfig {
                 ),
                 spec(
                     "state_estimator",
-                    super::grandtour::STATE_ESTIMATOR_TOPIC,
+                    topics::STATE_ESTIMATOR_TOPIC,
                     50.0,
                     0.003,
                     d.se_lever,
@@ -172,7 +172,7 @@ impl MultiClockConfig {
                 ),
                 spec(
                     "open3d_slam",
-                    super::grandtour::OPEN3D_SLAM_TOPIC,
+                    topics::OPEN3D_SLAM_TOPIC,
                     10.0,
                     0.005,
                     d.o3d_lever,
