@@ -1,4 +1,4 @@
-//! The lead search (see the module doc): fits along the forward lever's valley from a scan of Δt
+//! The lead search (see `mod.rs`): fits along the forward lever's valley from a scan of Δt
 //! over the lead a lever makes at a walk, judged on the referee's longer windows; the valley's σ
 //! where the windows cannot tell two of them apart.
 
@@ -226,7 +226,7 @@ fn same_basin(a: &PoseFit, b: &PoseFit) -> bool {
     (a.theta[0] - b.theta[0]).abs() <= SAME_BASIN_S
 }
 
-/// The lead search (see the module doc): constant fits from the best minima of a scan of Δt over
+/// The lead search (see `mod.rs`): constant fits from the best minima of a scan of Δt over
 /// the lead a forward lever can make at the reference's walking speed `moving_speed_mps` (its
 /// mean while it moves) about the confident searches' answers `answers_s`, with the fit `near`
 /// (the whole mission's, from the applied answer); `None` where the robot is not [`walking`] or

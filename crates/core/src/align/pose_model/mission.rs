@@ -1,4 +1,4 @@
-//! Steps 2 to 4 (see the module doc): the profile measured from a fit, the model chosen from it
+//! Steps 2 to 4 (see `mod.rs`): the profile measured from a fit, the model chosen from it
 //! and that model's fit; a drift below the resolution or steps the fit does not tell apart taken
 //! back to the constant.
 

@@ -1,4 +1,4 @@
-//! Step 1 and the order of the rest (see the module doc): the whole mission's fit, the model the
+//! Step 1 and the order of the rest (see `mod.rs`): the whole mission's fit, the model the
 //! windows choose, the lead search where it runs, the final fit averaged over tilings and its σ.
 
 use nalgebra::Vector3;

@@ -1,4 +1,4 @@
-//! The profile's windows (see the module doc, step 2): those that say nothing or contradict their
+//! The profile's windows (see `mod.rs`, step 2): those that say nothing or contradict their
 //! neighbours left out, the rest's σ calibrated by their scatter.
 
 use super::POSE_SIGMA_FLOOR_S;

@@ -1,4 +1,4 @@
-//! The σ of step 4 (see the module doc): each parameter's error bar from the final fit's jackknife
+//! The σ of step 4 (see `mod.rs`): each parameter's error bar from the final fit's jackknife
 //! and the profile's windows, with a hidden drift, the valley, two basins and the tilings' cuts,
 //! and what it was made of ([`SigmaParts`]); whether a piecewise fit resolves its steps.
 
@@ -34,7 +34,7 @@ pub fn steps_resolved(fit: &PoseFit) -> bool {
 /// their scatter, scaled to the fit's windows by [`windows_share`], with the share of σ the fitted
 /// lever adds, which they hold): the mean of the two
 /// variances, at least the formal σ. The line's σ are the
-/// fit's, at least the windows' (see the module doc). The constant's σ also adds a drift the
+/// fit's, at least the windows' (see `mod.rs`). The constant's σ also adds a drift the
 /// profile measures beyond [`HIDDEN_DRIFT_Z`] of its σ, and `valley_s` (the lead search's: half
 /// the distance to a fit the windows cannot tell from it), both in quadrature; the piecewise
 /// model's headline is its longest segment's. Returns what the headline σ was made of.
@@ -96,7 +96,7 @@ pub(super) fn set_parameters(
     match model.model {
         OffsetModel::Constant => {
             model.offset_s = last.theta[0];
-            // A drift below the resolution that the constant could hide (see the module doc).
+            // A drift below the resolution that the constant could hide (see `mod.rs`).
             let hidden = match (model.drift_ppm, model.drift_sigma_ppm) {
                 (Some(d), Some(s)) if d.abs() > HIDDEN_DRIFT_Z * s => {
                     let excess = (d * d - s * s).sqrt() * 1e-6;

@@ -1,4 +1,4 @@
-//! Step 5 (see the module doc): a constant's Δt and lever the mean over tilings of the windows,
+//! Step 5 (see `mod.rs`): a constant's Δt and lever the mean over tilings of the windows,
 //! and what that mean removes from one tiling's σ.
 
 use nalgebra::Vector3;
