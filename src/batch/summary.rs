@@ -1,8 +1,8 @@
 //! Per-mission results and the summary across missions: for each estimate name (and window size), how
 //! many missions, the median and IQR of the per-mission Drift Error RMSE, and each mission's Δt and
 //! confidence; failed missions with their error. Written as `summary.json`, `summary.csv`,
-//! `summary.md` and `summary.html` by [`super::summary_files`]. Built only from the per-mission results, so `trajdrift merge` over the folders of
-//! sharded runs gives the same summary as one run.
+//! `summary.md` and `summary.html` by [`super::summary_files`]. Built only from the per-mission
+//! results, so `trajdrift merge` over the folders of sharded runs gives the same summary as one run.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
