@@ -451,13 +451,13 @@ pub struct SimulateArgs {
     /// Random seed.
     #[arg(long, default_value_t = 7)]
     pub seed: u64,
-    /// Clock offset Δt of the estimate, seconds.
+    /// Clock offset Δt of the estimate, seconds, in [-86400, 86400].
     #[arg(long, default_value_t = 0.2, allow_hyphen_values = true)]
     pub time_offset: f64,
-    /// Scale error of the estimate (0.02 = 2 % too long).
+    /// Scale error of the estimate (0.02 = 2 % too long), in [-0.5, 0.5].
     #[arg(long, default_value_t = 0.02, allow_hyphen_values = true)]
     pub scale_error: f64,
-    /// Estimate sensor position in the body frame, x,y,z metres.
+    /// Estimate sensor position in the body frame, x,y,z metres, each in [-1000, 1000].
     #[arg(
         long,
         value_name = "X,Y,Z",
@@ -466,13 +466,13 @@ pub struct SimulateArgs {
         value_parser = triple
     )]
     pub lever: [f64; 3],
-    /// Repeat the route this many times (longer missions).
+    /// Repeat the route this many times (longer missions), up to 6 hours of mission.
     #[arg(long, default_value_t = 1, conflicts_with = "duration")]
     pub laps: usize,
-    /// Repeat the route to last exactly this long, seconds (instead of --laps).
+    /// Repeat the route to last exactly this long, seconds (instead of --laps), in [1, 21600].
     #[arg(long, value_name = "S", value_parser = positive)]
     pub duration: Option<f64>,
-    /// Rate of the estimate (Odometry), Hz.
+    /// Rate of the estimate (Odometry), Hz, in (0, 1000], at most 1e7 samples in the mission.
     #[arg(long, value_name = "HZ", default_value_t = 20.0, value_parser = positive)]
     pub est_rate: f64,
     /// Add an unrelated bulk channel (like lidar) totalling about this many MiB.
@@ -481,7 +481,7 @@ pub struct SimulateArgs {
     /// Replace an existing output.
     #[arg(long)]
     pub force: bool,
-    /// Clock rate error of the estimate, ppm (positive: its clock runs fast).
+    /// Clock rate error of the estimate, ppm (positive: its clock runs fast), in [-10000, 10000].
     #[arg(
         long,
         value_name = "PPM",

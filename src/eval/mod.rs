@@ -100,13 +100,47 @@ fn crop_inputs(config: &EvalConfig, inputs: &mut Inputs) -> Result<(i64, CropNs)
         require_samples(&inputs.path, e)?;
     }
     if config.params.time_offset.is_none() {
-        crate::params::check_search_size(
-            config.params.max_offset_s(),
-            config.params.grid_s(),
-            data_span_s(inputs),
-        )?;
+        check_search_size(config, inputs)?;
     }
     Ok((t0_ns, (crop_start, crop_end)))
+}
+
+/// The offset search's size over the data's span against the budgets
+/// ([`crate::params::check_search_size`]). A refusal names the input of the longest span and, when
+/// one gap between its samples makes most of that span (a bad stamp), the gap and its samples.
+pub(crate) fn check_search_size(config: &EvalConfig, inputs: &Inputs) -> Result<()> {
+    let span_s = data_span_s(inputs);
+    crate::params::check_search_size(
+        config.params.max_offset_s(),
+        config.params.grid_s(),
+        &config.params.offset_profile(),
+        span_s,
+    )
+    .map_err(|e| {
+        let longest = std::iter::once(&inputs.reference)
+            .chain(&inputs.estimates)
+            .max_by_key(|t| t.trajectory.span_ns().map_or(0, |(a, b)| b.saturating_sub(a)));
+        let Some(t) = longest else { return e };
+        let stamps = &t.trajectory.stamps_ns;
+        let gap = stamps
+            .windows(2)
+            .enumerate()
+            .max_by_key(|(_, w)| w[1].saturating_sub(w[0]));
+        match gap {
+            Some((i, w)) if (w[1] as f64 - w[0] as f64) * 1e-9 > 0.5 * span_s => {
+                Error::InvalidArgument(format!(
+                    "{}: a gap of {:.0} s between samples {} and {} (stamps {:.3} s and {:.3} s): {e}",
+                    t.label,
+                    (w[1] as f64 - w[0] as f64) * 1e-9,
+                    i + 1,
+                    i + 2,
+                    w[0] as f64 * 1e-9,
+                    w[1] as f64 * 1e-9,
+                ))
+            }
+            _ => Error::InvalidArgument(format!("{}: {e}", t.label)),
+        }
+    })
 }
 
 /// Every estimate evaluated against the reference (in parallel), its extrinsics from `levers`

@@ -733,12 +733,23 @@ pub fn load_transform(path: &Path) -> Result<Similarity> {
         else {
             return Err(bad("a key is missing".into()));
         };
-        let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(qw, qx, qy, qz));
-        return Ok(Similarity {
-            rotation: *q.to_rotation_matrix().matrix(),
-            translation: Vector3::new(x, y, z),
-            scale: f("scale").unwrap_or(1.0),
-        });
+        let q = nalgebra::Quaternion::new(qw, qx, qy, qz);
+        // A zero or non-finite quaternion has no rotation (normalising it never ends or gives NaN).
+        if !(q.norm().is_finite() && q.norm() > 1e-9) {
+            return Err(bad(format!(
+                "the quaternion ({qx}, {qy}, {qz}, {qw}) has no rotation (norm {})",
+                q.norm()
+            )));
+        }
+        let q = UnitQuaternion::from_quaternion(q);
+        return finite_similarity(
+            Similarity {
+                rotation: *q.to_rotation_matrix().matrix(),
+                translation: Vector3::new(x, y, z),
+                scale: f("scale").unwrap_or(1.0),
+            },
+            bad,
+        );
     }
     let m: Vec<f64> = if bytes.starts_with(b"\x93NUMPY") {
         let a = crate::report::npy::read_npy(&bytes).map_err(bad)?;
@@ -758,6 +769,9 @@ pub fn load_transform(path: &Path) -> Result<Similarity> {
     if m.len() != 16 {
         return Err(bad(format!("{} numbers", m.len())));
     }
+    if m.iter().any(|v| !v.is_finite()) {
+        return Err(bad("a number is not finite".into()));
+    }
     let sr = nalgebra::Matrix3::from_fn(|i, j| m[4 * i + j]);
     let det = sr.determinant();
     if det <= 0.0 || m[12..] != [0.0, 0.0, 0.0, 1.0] {
@@ -769,11 +783,31 @@ pub fn load_transform(path: &Path) -> Result<Similarity> {
     if (g - nalgebra::Matrix3::identity()).abs().max() > 1e-6 {
         return Err(bad("not a Sim(3) matrix (rotation not orthonormal)".into()));
     }
-    Ok(Similarity {
-        rotation,
-        translation: Vector3::new(m[3], m[7], m[11]),
-        scale,
-    })
+    finite_similarity(
+        Similarity {
+            rotation,
+            translation: Vector3::new(m[3], m[7], m[11]),
+            scale,
+        },
+        bad,
+    )
+}
+
+/// `s`, unless a number of it is not finite or its scale is not positive (its inverse, and every
+/// pose it moves, would be NaN): `bad` says why.
+fn finite_similarity(s: Similarity, bad: impl Fn(String) -> Error) -> Result<Similarity> {
+    let finite = s
+        .rotation
+        .iter()
+        .chain(s.translation.iter())
+        .all(|v| v.is_finite());
+    if !finite {
+        return Err(bad("a number is not finite".into()));
+    }
+    if !(s.scale.is_finite() && s.scale > 0.0) {
+        return Err(bad(format!("scale {} is not a number above zero", s.scale)));
+    }
+    Ok(s)
 }
 
 /// The inverse of a similarity (`--invert_transform`).

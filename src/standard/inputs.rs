@@ -203,7 +203,9 @@ fn load_text(
         EvoFormat::Euroc => rayon::join(|| euroc(reference), || tum(estimate)),
         _ => unreachable!("recording forms are read through eval inputs"),
     };
-    let (reference_poses, estimate_poses) = (reference_poses?, estimate_poses?);
+    // Rows not finite are dropped, as every reader of the project drops them (evo's own rows stay
+    // in file order).
+    let (reference_poses, estimate_poses) = (reference_poses?.usable(), estimate_poses?.usable());
     Ok(LoadedPair {
         reference: reference_poses,
         estimate: estimate_poses,

@@ -39,6 +39,9 @@ pub fn run_like(
 /// The shape of the recording and the estimate of `config` (its first estimate).
 pub fn recording_shape(config: &EvalConfig, progress: Progress<'_>) -> Result<Shape> {
     let inputs = load(config, progress)?;
+    // The missions are simulated over the recording's span and searched like it: a span the
+    // evaluation refuses (a bad stamp years late) is refused here, before anything is simulated.
+    crate::eval::check_search_size(config, &inputs)?;
     let estimate = inputs.estimates.first().ok_or_else(|| {
         Error::InvalidArgument("validate --like needs one --estimate".to_string())
     })?;

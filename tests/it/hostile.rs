@@ -774,3 +774,268 @@ fn fuzz_regressions_end_quickly() {
         );
     }
 }
+
+/// Asserts a usage error (exit 2) said on one line that contains `says`, within seconds.
+#[track_caller]
+fn one_line_usage_error(args: &[&str], says: &str) {
+    let start = std::time::Instant::now();
+    let o = run(args);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+    assert_eq!(e.trim_end().lines().count(), 1, "{args:?}: {e}");
+    assert!(e.contains(says), "{args:?}: {e}");
+    assert!(
+        start.elapsed().as_secs() < 10,
+        "{args:?} took {:?}",
+        start.elapsed()
+    );
+}
+
+/// The offset profile's window and step have a floor (a step of a microsecond made tens of GB of
+/// windows), on the command line of eval and audit and in a manifest alike.
+#[test]
+fn offset_profile_window_and_step_have_a_floor() {
+    let f = Fixture::new();
+    let rec = f.p("in.mcap");
+    for (flag, value, says) in [
+        (
+            "--offset-window",
+            "1e-6",
+            "--offset-window 1e-6: out of range; expected a finite value in [1, 86400] s",
+        ),
+        (
+            "--offset-step",
+            "1e-6",
+            "--offset-step 1e-6: out of range; expected a finite value in [0.1, 86400] s",
+        ),
+        (
+            "--offset-step",
+            "0.001",
+            "--offset-step 0.001: out of range",
+        ),
+    ] {
+        one_line_usage_error(&eval_args(s(&rec), &[flag, value]), says);
+    }
+    one_line_usage_error(
+        &["audit", s(&rec), "--offset-step", "1e-6", "-q"],
+        "--offset-step 1e-6: out of range",
+    );
+    let manifest = f.p("m.toml");
+    std::fs::write(
+        &manifest,
+        format!(
+            "[defaults]\noffset_step = 1e-7\n\n[[mission]]\nname = \"a\"\nrecording = \"{}\"\nreference = \"/reference/position\"\nestimates = [\"/estimate/odom\"]\n",
+            s(&rec)
+        ),
+    )
+    .unwrap();
+    let out = f.p("out");
+    one_line_usage_error(
+        &["batch", s(&manifest), "--out", s(&out), "-q"],
+        "offset_step 1e-7: out of range",
+    );
+}
+
+/// One stamp years late made a span the offset search (eval) or the simulation (validate --like)
+/// could not hold: refused naming the file and the gap, on one line.
+#[test]
+fn a_stamp_years_late_is_refused_naming_its_file_and_gap() {
+    let f = Fixture::new();
+    let text = std::fs::read_to_string(f.p("ref.tum")).unwrap();
+    for (name, late) in [("bad1e7.tum", "1e7"), ("bad1e300.tum", "1e300")] {
+        let mut rows: Vec<String> = text.lines().map(String::from).collect();
+        let k = rows.len() / 2;
+        let (stamp, rest) = rows[k].split_once(' ').unwrap();
+        let stamp = stamp.parse::<f64>().unwrap() + late.parse::<f64>().unwrap();
+        rows[k] = format!("{stamp:e} {rest}");
+        let bad = f.p(name);
+        std::fs::write(&bad, rows.join("\n") + "\n").unwrap();
+        let est = f.p("est.tum");
+        for args in [
+            vec![
+                "eval",
+                "--reference-file",
+                s(&bad),
+                "--estimate-file",
+                s(&est),
+                "-q",
+            ],
+            vec![
+                "validate",
+                "--missions",
+                "1",
+                "--reference-file",
+                s(&bad),
+                "--estimate-file",
+                s(&est),
+            ],
+        ] {
+            one_line_usage_error(&args, &format!("{}: a gap of", s(&bad)));
+        }
+    }
+}
+
+/// `simulate` refuses numbers that are not finite or beyond what a mission can be, naming the flag,
+/// before anything is simulated or written.
+#[test]
+fn simulate_refuses_numbers_out_of_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim.mcap");
+    let cases: [(&[&str], &str); 9] = [
+        (&["--est-rate", "1e9"], "--est-rate 1e9: out of range"),
+        (&["--laps", "1000000"], "--laps 1000000: out of range"),
+        (&["--duration", "1e12"], "--duration 1e12: out of range"),
+        (&["--time-offset", "nan"], "--time-offset NaN: out of range"),
+        (
+            &["--time-offset", "1e300"],
+            "--time-offset 1e300: out of range",
+        ),
+        (
+            &["--clock-drift-ppm", "-1e6"],
+            "--clock-drift-ppm -1e6: out of range",
+        ),
+        (&["--lever", "nan,0,0"], "--lever x NaN: out of range"),
+        (&["--scale-error", "nan"], "--scale-error NaN: out of range"),
+        (
+            &["--duration", "21600", "--est-rate", "1000"],
+            "--est-rate 1000:",
+        ),
+    ];
+    for (extra, says) in cases {
+        let mut args = vec!["simulate", s(&out)];
+        args.extend_from_slice(extra);
+        one_line_usage_error(&args, says);
+        assert!(!out.exists(), "{extra:?}");
+    }
+}
+
+/// A `--transform_left/--transform_right` file with a zero or non-finite quaternion (which made the
+/// normalisation loop for ever) or a scale of zero (NaN poses once inverted) is refused by name.
+#[test]
+fn transforms_without_a_rotation_or_scale_are_refused() {
+    let f = Fixture::new();
+    let one = f.p("est.tum");
+    let cases = [
+        (
+            "tfz.json",
+            r#"{"x":0,"y":0,"z":0,"qx":0,"qy":0,"qz":0,"qw":0}"#,
+            "has no rotation",
+        ),
+        (
+            "tfs0.json",
+            r#"{"x":0,"y":0,"z":0,"qx":0,"qy":0,"qz":0,"qw":1,"scale":0}"#,
+            "scale 0",
+        ),
+        (
+            "tfm.txt",
+            "1 0 0 0\n0 1 0 nan\n0 0 1 0\n0 0 0 1\n",
+            "not finite",
+        ),
+    ];
+    for (name, text, says) in cases {
+        let tf = f.p(name);
+        std::fs::write(&tf, text).unwrap();
+        for flag in ["--transform_left", "--transform_right"] {
+            for invert in [false, true] {
+                let mut args = vec!["traj", "tum", s(&one), flag, s(&tf)];
+                if invert {
+                    args.push("--invert_transform");
+                }
+                one_line_usage_error(&args, &format!("{}: ", s(&tf)));
+                one_line_usage_error(&args, says);
+            }
+        }
+    }
+}
+
+/// ape and rpe drop the rows that are not finite, like every reader: the numbers are those of the
+/// file without them, and the alignment and the pairs are found.
+#[test]
+fn ape_and_rpe_drop_rows_not_finite_like_every_reader() {
+    let f = Fixture::new();
+    let (r, e) = (f.p("ref.tum"), f.p("est.tum"));
+    let text = std::fs::read_to_string(&e).unwrap();
+    let rows: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).collect();
+    let (mut with_nan, mut without) = (String::new(), String::new());
+    for (i, row) in rows.iter().enumerate() {
+        if i % 37 == 5 {
+            let v: Vec<&str> = row.split(' ').collect();
+            with_nan.push_str(&format!("{} {} nan {}\n", v[0], v[1], v[3..].join(" ")));
+        } else {
+            with_nan.push_str(&format!("{row}\n"));
+            without.push_str(&format!("{row}\n"));
+        }
+    }
+    let (nan, dropped) = (f.p("est_nan.tum"), f.p("est_dropped.tum"));
+    std::fs::write(&nan, with_nan).unwrap();
+    std::fs::write(&dropped, without).unwrap();
+    for extra in [
+        vec!["ape", "--t_max_diff", "0.02"],
+        vec!["ape", "--t_max_diff", "0.02", "-a"],
+        vec!["rpe", "--t_max_diff", "0.02"],
+    ] {
+        let stats = |est: &std::path::Path| {
+            let mut args = vec![extra[0], "tum", s(&r), s(est)];
+            args.extend_from_slice(&extra[1..]);
+            args.extend_from_slice(&["--json", "-"]);
+            let o = run(&args);
+            assert_eq!(o.status.code(), Some(0), "{args:?}: {}", stderr(&o));
+            let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+            v["stats"].clone()
+        };
+        let (a, b) = (stats(&nan), stats(&dropped));
+        assert!(
+            a["sse"].as_f64().is_some_and(f64::is_finite),
+            "{extra:?}: {a}"
+        );
+        assert_eq!(a, b, "{extra:?}");
+    }
+}
+
+/// evo's numeric flags of ape and rpe are checked like eval's: a usage error naming the flag.
+#[test]
+fn evo_numeric_flags_out_of_range_are_usage_errors() {
+    let f = Fixture::new();
+    let (r, e) = (f.p("ref.tum"), f.p("est.tum"));
+    let cases: [(&[&str], &str); 7] = [
+        (
+            &["--motion_filter", "-1", "-1"],
+            "--motion_filter DISTANCE -1: out of range",
+        ),
+        (
+            &["--motion_filter", "nan", "0"],
+            "--motion_filter DISTANCE NaN: out of range",
+        ),
+        (
+            &["--motion_filter", "0", "inf"],
+            "--motion_filter ANGLE_DEGREES inf: out of range",
+        ),
+        (
+            &["--plot_colormap_max", "nan"],
+            "--plot_colormap_max NaN: out of range",
+        ),
+        (
+            &["--plot_colormap_max_percentile", "200"],
+            "--plot_colormap_max_percentile 200: out of range",
+        ),
+        (
+            &["--plot_colormap_max_percentile", "-5"],
+            "--plot_colormap_max_percentile -5: out of range",
+        ),
+        (
+            &["--plot_colormap_min", "2", "--plot_colormap_max", "1"],
+            "--plot_colormap_min 2 must be below --plot_colormap_max 1",
+        ),
+    ];
+    for (extra, says) in cases {
+        for metric in ["ape", "rpe"] {
+            let mut args = vec![metric, "tum", s(&r), s(&e)];
+            args.extend_from_slice(extra);
+            one_line_usage_error(&args, says);
+        }
+    }
+    one_line_usage_error(
+        &["traj", "tum", s(&e), "--motion_filter", "nan", "0"],
+        "--motion_filter DISTANCE NaN: out of range",
+    );
+}

@@ -78,6 +78,63 @@ pub fn validate(a: &MetricArgs) -> trajdrift::Result<()> {
     Ok(())
 }
 
+/// evo's `--motion_filter DISTANCE ANGLE_DEGREES` (ape, rpe, traj): a distance in [0, 1e6] m and an
+/// angle in [0, 360]°, checked before anything is read.
+pub fn check_motion_filter(m: Option<&[f64]>) -> trajdrift::Result<()> {
+    use Bound::Inclusive;
+    if let Some(&[d, a]) = m {
+        in_range(
+            "--motion_filter DISTANCE",
+            d,
+            Inclusive(0.0),
+            Inclusive(1.0e6),
+            "m",
+        )?;
+        in_range(
+            "--motion_filter ANGLE_DEGREES",
+            a,
+            Inclusive(0.0),
+            Inclusive(360.0),
+            "°",
+        )?;
+    }
+    Ok(())
+}
+
+/// evo's numeric output flags of ape and rpe, checked before anything is read: the motion filter
+/// ([`check_motion_filter`]), the colour map's bounds finite with its minimum below its maximum, its
+/// percentile in [0, 100].
+pub fn validate_evo(evo: &EvoMetricArgs) -> trajdrift::Result<()> {
+    use Bound::Inclusive;
+    check_motion_filter(evo.motion_filter.as_deref())?;
+    let bound = |flag, v| in_range(flag, v, Inclusive(-1.0e15), Inclusive(1.0e15), "");
+    let max = evo
+        .plot_colormap_max
+        .map(|v| bound("--plot_colormap_max", v))
+        .transpose()?;
+    let min = evo
+        .plot_colormap_min
+        .map(|v| bound("--plot_colormap_min", v))
+        .transpose()?;
+    if let Some(p) = evo.plot_colormap_max_percentile {
+        in_range(
+            "--plot_colormap_max_percentile",
+            p,
+            Inclusive(0.0),
+            Inclusive(100.0),
+            "%",
+        )?;
+    }
+    if let (Some(lo), Some(hi)) = (min, max) {
+        if lo >= hi {
+            return Err(trajdrift::Error::InvalidArgument(format!(
+                "--plot_colormap_min {lo} must be below --plot_colormap_max {hi}"
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// The inputs named on the command line: evo's positional form, or the native one.
 pub fn inputs(a: &MetricArgs) -> Result<MetricInputs> {
     if let Some(format) = a.inputs.first().and_then(|w| EvoFormat::parse(w)) {
@@ -218,6 +275,7 @@ pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
     let log = EvoLog::new(&evo.usability, &(a, evo));
     note_ignored(&log, evo);
     validate(a)?;
+    validate_evo(evo)?;
     let relation = PoseRelation::parse(&a.pose_relation)?;
     let inputs = inputs(a)?;
     let guard = claim_outputs(a, evo)?;

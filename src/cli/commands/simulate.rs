@@ -84,8 +84,60 @@ fn multi_clock(a: &SimulateArgs, route: &[trajdrift::simulate::motion::Segment])
     Ok(EXIT_OK)
 }
 
+/// The longest mission simulated, seconds (six hours: longer than a robot's battery lasts).
+pub const MAX_DURATION_S: f64 = 21_600.0;
+/// The highest estimate rate, Hz (poses at IMU rate).
+pub const MAX_EST_RATE_HZ: f64 = 1_000.0;
+/// The most estimate samples one mission holds (about 640 MB of poses).
+pub const MAX_EST_SAMPLES: f64 = 1.0e7;
+
+/// Every number of the mission finite and in its range, before anything is simulated: a refusal
+/// (a usage error) names the flag, the value and the range.
+fn check_args(a: &SimulateArgs) -> trajdrift::Result<()> {
+    use trajdrift::params::{Bound, Range, LEVER_RANGE};
+    let range = |min: f64, max: f64, unit: &'static str| Range {
+        min: Bound::Inclusive(min),
+        max: Bound::Inclusive(max),
+        unit,
+    };
+    range(-86_400.0, 86_400.0, "s").check("--time-offset", a.time_offset)?;
+    range(-0.5, 0.5, "").check("--scale-error", a.scale_error)?;
+    range(-1.0e4, 1.0e4, "ppm").check("--clock-drift-ppm", a.clock_drift_ppm)?;
+    for (axis, v) in ["x", "y", "z"].iter().zip(a.lever) {
+        LEVER_RANGE.check(&format!("--lever {axis}"), v)?;
+    }
+    Range {
+        min: Bound::Exclusive(0.0),
+        ..range(0.0, MAX_EST_RATE_HZ, "Hz")
+    }
+    .check("--est-rate", a.est_rate)?;
+    let lap_s: f64 = default_route().iter().map(|s| s.duration_s).sum();
+    let duration_s = match a.duration {
+        Some(d) => range(1.0, MAX_DURATION_S, "s").check("--duration", d)?,
+        None => {
+            let most = (MAX_DURATION_S / lap_s).floor() as usize;
+            if a.laps > most {
+                return Err(trajdrift::Error::InvalidArgument(format!(
+                    "--laps {}: out of range; expected at most {most} laps of {lap_s:.0} s (a mission of at most {MAX_DURATION_S:.0} s)",
+                    a.laps
+                )));
+            }
+            a.laps.max(1) as f64 * lap_s
+        }
+    };
+    if duration_s * a.est_rate > MAX_EST_SAMPLES {
+        return Err(trajdrift::Error::InvalidArgument(format!(
+            "--est-rate {}: {duration_s:.0} s of estimate at this rate are {:.1e} samples (at most {MAX_EST_SAMPLES:.0e}); lower --est-rate, --duration or --laps",
+            a.est_rate,
+            duration_s * a.est_rate
+        )));
+    }
+    Ok(())
+}
+
 /// Runs the command; returns the exit code.
 pub fn run(a: SimulateArgs) -> Result<u8> {
+    check_args(&a)?;
     if a.out.exists() && !a.force {
         return Err(anyhow!(trajdrift::Error::InvalidArgument(format!(
             "{}: exists; pass --force to replace it",

@@ -120,6 +120,7 @@ fn auto_offset(
 pub fn run(a: TrajArgs) -> Result<u8> {
     let log = EvoLog::new(&a.usability, &a);
     warn_ignored(&a, &log);
+    super::metric::check_motion_filter(a.motion_filter.as_deref())?;
     let mut inputs: Vec<PathBuf> = a.inputs.iter().map(PathBuf::from).collect();
     inputs.extend(a.reference.iter().map(PathBuf::from));
     let guard = OutputGuard::new(&inputs);

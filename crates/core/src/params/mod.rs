@@ -18,7 +18,7 @@ mod value;
 
 use serde::Deserialize;
 
-pub use budget::{check_search_size, FINE_WORK_BUDGET, MEMORY_BUDGET_BYTES};
+pub use budget::{check_search_size, FINE_WORK_BUDGET, MEMORY_BUDGET_BYTES, PROFILE_WORK_BUDGET_S};
 use value::{de_param, word_values};
 pub use value::{
     show_number, triple, Bound, DefaultValue, ParamSpec, ParamValue, Range, ValueKind, Word,
@@ -183,11 +183,14 @@ parameters! {
     /// How `--offset-method auto` refines its answer: pose (the pose fit, when the estimate has
     /// orientations) or none (the signal searches' answer stands).
     offset_refine: OffsetRefine, "WORD", (default OffsetRefine::default() => offset_refine), ();
-    /// Window of the offset profile, seconds.
+    /// Window of the offset profile, seconds; at least 1 s (a shorter stretch holds no start, stop
+    /// or turn to correlate).
     offset_window: f64, "S", (otherwise "a tenth of the overlap, in 20–120 s"),
-        (range > 0.0, <= 86_400.0, "s");
-    /// Step of the offset profile, seconds.
-    offset_step: f64, "S", (otherwise "half the window"), (range > 0.0, <= 86_400.0, "s");
+        (range >= OFFSET_WINDOW_MIN_S, <= 86_400.0, "s");
+    /// Step of the offset profile, seconds; at least 0.1 s (clocks drift and step over minutes, and
+    /// the windows' work grows with the mission over the step: a long mission needs a longer step).
+    offset_step: f64, "S", (otherwise "half the window"),
+        (range >= OFFSET_STEP_MIN_S, <= 86_400.0, "s");
     /// Largest offset searched, seconds (GPS time and UTC alone differ by 18 s).
     max_offset: f64, "S", (default OffsetParams::default().max_offset_s => max_offset_s),
         (range > 0.0, <= 86_400.0, "s");
@@ -208,6 +211,10 @@ parameters! {
 
 /// The finest grid step of the offset search, seconds.
 pub const GRID_MIN_S: f64 = 1.0e-4;
+/// The shortest window of the offset profile, seconds.
+pub const OFFSET_WINDOW_MIN_S: f64 = 1.0;
+/// The finest step of the offset profile, seconds.
+pub const OFFSET_STEP_MIN_S: f64 = 0.1;
 
 /// The ranges of `--origin`'s three numbers: latitude °, longitude °, ellipsoidal height m.
 const ORIGIN_RANGES: [(&str, Range); 3] = [

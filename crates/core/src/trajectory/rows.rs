@@ -90,6 +90,13 @@ fn usable(p: &Vector3<f64>) -> Result<(), bool> {
     }
 }
 
+/// Whether a position is usable: finite and within [`MAX_COORDINATE`] (the rows
+/// [`Trajectory::clean`] keeps; evo's readers, which keep the rows in file order, drop the others by
+/// it too).
+pub fn usable_position(p: &Vector3<f64>) -> bool {
+    usable(p).is_ok()
+}
+
 impl Trajectory {
     /// Makes the trajectory usable and says what it took: counts stamps going back (file order),
     /// drops positions not finite or out of range, sorts by stamp and drops repeated stamps.

@@ -5,6 +5,7 @@
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 use crate::sources::tum::{DecimalQuaternions, TumOrientations};
+use crate::trajectory::rows::usable_position;
 use crate::trajectory::Trajectory;
 
 /// How a source's nanosecond stamps become the `f64` seconds evo compares: each reader of evo converts
@@ -157,6 +158,20 @@ impl Poses {
             positions: select_vec(self.positions, ids),
             rotations: self.rotations.map(|r| r.select(ids)),
         }
+    }
+
+    /// The poses whose position is usable (finite, in range: the rows every reader of the project
+    /// keeps, [`crate::trajectory::rows::usable_position`]), in file order with repeated stamps kept
+    /// as evo reads them.
+    pub fn usable(self) -> Poses {
+        if self.positions.iter().all(usable_position) {
+            return self;
+        }
+        let ids: Vec<u32> = (0..self.positions.len())
+            .filter(|&i| usable_position(&self.positions[i]))
+            .map(|i| i as u32)
+            .collect();
+        self.select(&ids)
     }
 
     /// Copies of the poses at `ids`, in that order (the source stays whole).
