@@ -834,7 +834,10 @@ fn every_reading_command_exits_3_on_a_truncated_recording() {
     let fixed = dir.path().join("fixed.mcap");
     let cases: Vec<(&str, Vec<&str>)> = vec![
         ("ape", [&["ape", r][..], &topics].concat()),
-        ("rpe", [&["rpe", r][..], &topics].concat()),
+        (
+            "rpe",
+            [&["rpe", r][..], &topics, &["-r", "point_distance"]].concat(),
+        ),
         ("traj", vec!["traj", "mcap", r, "/estimate/odom"]),
         (
             "sweep",
