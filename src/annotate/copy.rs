@@ -15,6 +15,7 @@ use mcap::sans_io::LinearReadEvent;
 use mcap::{McapError, Writer};
 
 use crate::error::{Error, Result};
+use crate::sources::mcap::lengths::read_footer;
 use crate::sources::mcap::stream::{fill, open_linear};
 use crate::sources::Progress;
 
@@ -171,6 +172,13 @@ impl<'a> RecordStream<'a> {
                 }
             };
             if opcode == op::DATA_END {
+                // Whole data, but no footer and end magic after it: still a file cut short.
+                if read_footer(&mut self.file, self.file_size)
+                    .map_err(|e| Error::io(self.input, e))?
+                    .is_none()
+                {
+                    self.truncated_at = Some(self.file_size);
+                }
                 return Ok(());
             }
             let corrupt = |detail: String| Error::CorruptMcap {

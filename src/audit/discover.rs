@@ -134,7 +134,8 @@ pub fn discover(recordings: &[PathBuf], request: &SourceRequest) -> Result<Disco
         None => match user_reference {
             Some(r) => (r, Vec::new()),
             None => (
-                pick_reference(&recordings[0], &readable, &mut notes)?,
+                pick_reference(&recordings[0], &readable, &mut notes)
+                    .map_err(|e| cut_short(recordings, "no pose or position topic").unwrap_or(e))?,
                 Vec::new(),
             ),
         },
@@ -142,10 +143,11 @@ pub fn discover(recordings: &[PathBuf], request: &SourceRequest) -> Result<Disco
     let reference_topic = Discovered::topic(&reference).to_string();
     let sources = pick_sources(&reference_topic, given, preset_sources, &readable);
     if sources.is_empty() {
-        return Err(Error::InvalidArgument(format!(
+        let only = format!("only the reference {reference_topic} as a pose or position topic");
+        return Err(cut_short(recordings, &only).unwrap_or_else(|| Error::InvalidArgument(format!(
             "{}: only the reference {reference_topic} is a pose or position topic; an audit needs two sources or more (give --source TOPIC, e.g. a TF chain /tf:PARENT:CHILD)",
             recordings[0].display()
-        )));
+        ))));
     }
     let mut names: BTreeMap<String, usize> = BTreeMap::new();
     for s in std::iter::once(&reference).chain(&sources) {
@@ -162,6 +164,22 @@ pub fn discover(recordings: &[PathBuf], request: &SourceRequest) -> Result<Disco
         topic_files: topic_files(&files)?,
         files,
         notes,
+    })
+}
+
+/// When `recordings` is one recording cut short: the error saying so (a failure, not a usage error),
+/// for a discovery that found too little in it, since what is missing may be past the cut. `found`
+/// says what was found before it.
+fn cut_short(recordings: &[PathBuf], found: &str) -> Option<Error> {
+    let [one] = recordings else {
+        return None;
+    };
+    let rec = crate::sources::open::open_recording(one).ok()?;
+    let (_, truncated_at) = crate::sources::tf_frames::scan(&*rec, &|_| {}).ok()?;
+    Some(Error::Damaged {
+        path: one.clone(),
+        offset: truncated_at?,
+        detail: format!("the recording is cut short there, and {found} was found before"),
     })
 }
 

@@ -108,6 +108,16 @@ pub fn emit(text: &str) -> trajdrift::Result<()> {
 
 /// Prints a warning line to stderr, names from files escaped.
 pub fn warn(w: &trajdrift::diag::Warning) {
-    let (code, message) = (w.code, &w.message);
-    eprintln!("warning [{code}]: {}", escape_line(message));
+    eprintln!("{}", escape_line(&warning_line(w)));
+}
+
+/// A warning as its one line, `warning [code]: message`, not yet escaped (for [`warn`] and evo's log).
+pub fn warning_line(w: &trajdrift::diag::Warning) -> String {
+    format!("warning [{}]: {}", w.code, w.message)
+}
+
+/// The exit code of a command that finished: [`EXIT_WARNING`] when it has a warning the user must
+/// see (a recording cut short, a weak offset), else [`EXIT_OK`].
+pub fn exit_code(warnings: &[trajdrift::diag::Warning]) -> u8 {
+    ExitStatus::from_warnings(!warnings.is_empty()).code()
 }

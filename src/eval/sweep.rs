@@ -15,7 +15,7 @@ use crate::eval::evaluate_loaded;
 use crate::eval::inputs::load;
 use crate::report::escape::csv_field;
 use crate::report::json::{DriftErrorReport, EstimateReport};
-use crate::sources::Progress;
+use crate::sources::{Progress, Warning};
 
 /// The parameter a sweep varies (each is the `eval` flag of the same name).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -188,6 +188,8 @@ pub struct Sweep {
     pub param: SweepParam,
     pub rows: Vec<SweepRow>,
     pub method_offsets: Vec<MethodOffset>,
+    /// What the read warns of (a recording cut short): said once, not per value.
+    pub warnings: Vec<Warning>,
 }
 
 /// Runs the evaluation of `base` at every value of `param`, in parallel; `on_done` is called as each
@@ -268,6 +270,7 @@ pub fn run_sweep(
         param,
         rows,
         method_offsets,
+        warnings: inputs.warnings,
     })
 }
 

@@ -22,6 +22,7 @@ use crate::metrics::standard::{Poses, StampSeconds, SyncMethod};
 use crate::output::{OutputFile, OutputGuard};
 use crate::plot::evo::{EvoFigure, PlotMode, TrajectoryMap, XyzOverTime};
 use crate::sources::text::{read_text_audited, TextFormat, TextOptions};
+use crate::sources::Warning;
 use crate::trajectory::rows::RowAudit;
 use crate::trajectory::Trajectory;
 
@@ -72,10 +73,11 @@ pub fn load_text(path: &Path, format: Option<TextFormat>) -> Result<TrajInput> {
     })
 }
 
-/// Reads `topics` (topics or `/tf:PARENT:CHILD` chains) of a recording.
-pub fn load_topics(recording: &Path, topics: &[String]) -> Result<Vec<TrajInput>> {
+/// Reads `topics` (topics or `/tf:PARENT:CHILD` chains) of a recording; with what the read warns of
+/// (a recording cut short, [`crate::eval::inputs::Inputs::warnings`]).
+pub fn load_topics(recording: &Path, topics: &[String]) -> Result<(Vec<TrajInput>, Vec<Warning>)> {
     let Some((first, rest)) = topics.split_first() else {
-        return Ok(Vec::new());
+        return Ok((Vec::new(), Vec::new()));
     };
     let config = EvalConfig::new(
         Some(recording.to_path_buf()),
@@ -83,7 +85,7 @@ pub fn load_topics(recording: &Path, topics: &[String]) -> Result<Vec<TrajInput>
         rest.iter().map(|t| NamedInput::topic(t)).collect(),
     );
     let inputs = crate::eval::inputs::load(&config, &|_| {})?;
-    Ok(std::iter::once(inputs.reference)
+    let loaded = std::iter::once(inputs.reference)
         .chain(inputs.estimates)
         .zip(topics)
         .map(|(l, topic)| TrajInput {
@@ -94,7 +96,8 @@ pub fn load_topics(recording: &Path, topics: &[String]) -> Result<Vec<TrajInput>
             rows: l.rows,
             checks: RawChecks::default(),
         })
-        .collect())
+        .collect();
+    Ok((loaded, inputs.warnings))
 }
 
 /// numpy's `allclose(norm, 1)`.

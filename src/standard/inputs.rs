@@ -12,7 +12,7 @@ use crate::sources::euroc::read_euroc;
 use crate::sources::kitti::read_kitti_matrices;
 use crate::sources::text::{detect_format, TextFormat};
 use crate::sources::tum::read_tum_rows_compact;
-use crate::sources::Progress;
+use crate::sources::{Progress, Warning};
 
 /// evo's format word.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -61,6 +61,8 @@ pub struct LoadedPair {
     pub estimate: Poses,
     pub reference_label: String,
     pub estimate_label: String,
+    /// What the read warns of (a recording cut short), as [`crate::eval::inputs::Inputs::warnings`].
+    pub warnings: Vec<Warning>,
 }
 
 impl MetricInputs {
@@ -142,6 +144,7 @@ impl MetricInputs {
                     estimate: Poses::from_trajectory(estimate, conv),
                     reference_label,
                     estimate_label,
+                    warnings: inputs.warnings,
                 })
             }
         }
@@ -211,6 +214,7 @@ fn load_text(
         estimate: estimate_poses,
         reference_label: reference.display().to_string(),
         estimate_label: estimate.display().to_string(),
+        warnings: Vec::new(),
     })
 }
 

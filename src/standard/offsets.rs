@@ -9,6 +9,7 @@ use serde::Serialize;
 
 use crate::align::auto_offset::auto_time_offset;
 use crate::align::time_offset::{estimate_time_offset, OffsetMethod, OffsetStatus};
+use crate::diag::{Warning, WarningCode};
 use crate::error::{Error, Result};
 use crate::eval::config::EvalConfig;
 use crate::metrics::standard::{
@@ -190,8 +191,13 @@ pub fn spatial_offset(
     })
 }
 
-/// Runs every method on the first estimate of `config`.
-pub fn compare_offset_methods(config: &EvalConfig, spatial_range_s: f64) -> Result<Vec<OffsetRow>> {
+/// Runs every method on the first estimate of `config`. Returns the rows and the warnings the user must
+/// see: the read's (a recording cut short) and, as `eval` warns of a weak offset, one when no method's
+/// answer is `ok`.
+pub fn compare_offset_methods(
+    config: &EvalConfig,
+    spatial_range_s: f64,
+) -> Result<(Vec<OffsetRow>, Vec<Warning>)> {
     let inputs = crate::eval::inputs::load(config, &|_| {})?;
     let (reference, estimate) = pair_of(&inputs)?;
     let t0 = reference.stamps_ns.first().copied().unwrap_or(0);
@@ -257,7 +263,17 @@ pub fn compare_offset_methods(config: &EvalConfig, spatial_range_s: f64) -> Resu
         )
     });
     rows.push(row(OffsetWay::Auto, found, start));
-    Ok(rows)
+    let mut warnings = inputs.warnings.clone();
+    if !rows.iter().any(|r| r.status == RowStatus::Ok) {
+        warnings.push(Warning {
+            code: WarningCode::WeakTimeOffset,
+            message: format!(
+                "{}: no method found a confident time offset (each one is weak or failed, see its row). Check the overlap or give --time-offset",
+                inputs.estimates[0].label
+            ),
+        });
+    }
+    Ok((rows, warnings))
 }
 
 /// The reference and the first estimate; every method needs a few samples on each side, fewer are

@@ -14,7 +14,7 @@ use crate::error::{Error, Result};
 use crate::eval::config::EvalConfig;
 use crate::eval::inputs::load;
 use crate::simulate::like::{scenario_like, shape_of, Shape};
-use crate::sources::Progress;
+use crate::sources::{Progress, Warning};
 
 /// The grades of `missions` missions shaped like `shape` (seeds `first_seed` …), in seed order.
 pub fn run_like(
@@ -36,8 +36,12 @@ pub fn run_like(
         .collect()
 }
 
-/// The shape of the recording and the estimate of `config` (its first estimate).
-pub fn recording_shape(config: &EvalConfig, progress: Progress<'_>) -> Result<Shape> {
+/// The shape of the recording and the estimate of `config` (its first estimate), and what the read
+/// warns of (a recording cut short).
+pub fn recording_shape(
+    config: &EvalConfig,
+    progress: Progress<'_>,
+) -> Result<(Shape, Vec<Warning>)> {
     let inputs = load(config, progress)?;
     // The missions are simulated over the recording's span and searched like it: a span the
     // evaluation refuses (a bad stamp years late) is refused here, before anything is simulated.
@@ -45,12 +49,13 @@ pub fn recording_shape(config: &EvalConfig, progress: Progress<'_>) -> Result<Sh
     let estimate = inputs.estimates.first().ok_or_else(|| {
         Error::InvalidArgument("validate --like needs one --estimate".to_string())
     })?;
-    shape_of(&inputs.reference.trajectory, &estimate.trajectory).ok_or_else(|| {
+    let shape = shape_of(&inputs.reference.trajectory, &estimate.trajectory).ok_or_else(|| {
         Error::InvalidArgument(format!(
             "{}: the reference {} and the estimate {} need 10 samples each and 30 s of reference to take their shape from",
             inputs.path, inputs.reference.label, estimate.label
         ))
-    })
+    })?;
+    Ok((shape, inputs.warnings))
 }
 
 /// What the user reads: the shape taken from the recording, then the accuracy on missions of it.

@@ -1039,3 +1039,157 @@ fn evo_numeric_flags_out_of_range_are_usage_errors() {
         "--motion_filter DISTANCE NaN: out of range",
     );
 }
+
+/// The sim_ground fixture's MCAP, copied into `dir` with its last `cut` bytes left out.
+fn cut_fixture(dir: &Path, cut: usize) -> PathBuf {
+    let bytes = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fixtures/sim_ground/mission.mcap"
+    ))
+    .unwrap();
+    let p = dir.join(format!("cut{cut}.mcap"));
+    std::fs::write(&p, &bytes[..bytes.len() - cut]).unwrap();
+    p
+}
+
+fn assert_truncated(what: &str, o: &Output) {
+    let e = stderr(o);
+    assert_eq!(o.status.code(), Some(3), "{what}: {e}");
+    assert!(e.contains("warning [truncated_recording]"), "{what}: {e}");
+}
+
+// An MCAP whose data is whole but whose summary or footer is cut off is a truncated recording.
+#[test]
+fn an_mcap_cut_after_its_data_is_truncated() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.tum");
+    for cut in [1, 8, 37, 100, 1500] {
+        let rec = cut_fixture(dir.path(), cut);
+        let o = run(&["topics", s(&rec)]);
+        assert_truncated(&format!("topics, {cut} bytes cut"), &o);
+        let o = run(&["export", s(&rec), "--topic", "/reference/position", s(&out)]);
+        assert_truncated(&format!("export, {cut} bytes cut"), &o);
+        assert!(stderr(&o).contains("no footer"), "{}", stderr(&o));
+    }
+    // The whole file is not.
+    let whole = cut_fixture(dir.path(), 0);
+    let o = run(&[
+        "export",
+        s(&whole),
+        "--topic",
+        "/reference/position",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+// Every command that reads a recording carries its truncation to exit code 3.
+#[test]
+fn every_reading_command_exits_3_on_a_truncated_recording() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = cut_fixture(dir.path(), 1);
+    let r = s(&rec);
+    let topics = [
+        "--reference",
+        "/reference/position",
+        "--estimate",
+        "/estimate/odom",
+    ];
+    let sweep = dir.path().join("sweep");
+    let fixed = dir.path().join("fixed.mcap");
+    let cases: Vec<(&str, Vec<&str>)> = vec![
+        ("ape", [&["ape", r][..], &topics].concat()),
+        (
+            "rpe",
+            [&["rpe", r][..], &topics, &["-r", "point_distance"]].concat(),
+        ),
+        ("traj", vec!["traj", "mcap", r, "/estimate/odom"]),
+        (
+            "sweep",
+            [
+                &[
+                    "sweep",
+                    r,
+                    "--param",
+                    "window",
+                    "--values",
+                    "10",
+                    "--time-offset",
+                    "0",
+                ][..],
+                &["--out", s(&sweep)],
+                &topics,
+            ]
+            .concat(),
+        ),
+        (
+            "validate --like",
+            [&["validate", "--like", r, "--missions", "1"][..], &topics].concat(),
+        ),
+        (
+            "export",
+            vec!["export", r, "--topic", "/estimate/odom", "-"],
+        ),
+        ("restamp", vec!["restamp", r, "--out", s(&fixed), "--quiet"]),
+    ];
+    for (what, args) in cases {
+        assert_truncated(what, &run(&args));
+    }
+}
+
+// `topics` counts what the readers read in a bag whose index is cut short, and says it is cut.
+#[test]
+fn topics_counts_a_bag_with_its_index_cut_as_the_readers_read_it() {
+    let f = Fixture::new();
+    let bytes = std::fs::read(f.p("in.bag")).unwrap();
+    let cut = f.p("cut.bag");
+    std::fs::write(&cut, &bytes[..bytes.len() - 10]).unwrap();
+    let o = run(&["topics", s(&cut), "--json", "-"]);
+    assert_truncated("topics", &o);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let count = |topic: &str| {
+        v["topics"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|t| t["topic"] == topic)
+            .map(|t| t["message_count"].as_u64().unwrap())
+    };
+    let out = f.p("o.tum");
+    let o = run(&["export", s(&cut), "--topic", "/reference/position", s(&out)]);
+    assert_truncated("export", &o);
+    let exported = std::fs::read_to_string(&out).unwrap().lines().count() as u64;
+    assert_eq!(count("/reference/position"), Some(exported), "{v}");
+    assert_eq!(exported, 40);
+}
+
+// An audit of a recording cut before any pose topic fails on the damage, not as a usage error.
+#[test]
+fn audit_of_a_recording_cut_before_its_topics_is_a_failure() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fixtures/sim_ground/mission.mcap"
+    ))
+    .unwrap();
+    let rec = dir.path().join("cut.mcap");
+    std::fs::write(&rec, &bytes[..100]).unwrap();
+    let o = run(&["audit", s(&rec)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("damaged at byte"), "{}", stderr(&o));
+}
+
+// `offset` warns (exit 3) when no method finds a confident offset, as `eval` does.
+#[test]
+fn offset_exits_3_when_no_method_is_confident() {
+    let dir = tempfile::tempdir().unwrap();
+    let still = dir.path().join("still.tum");
+    let rows: String = (0..600)
+        .map(|i| format!("{:.3} 1 2 3 0 0 0 1\n", 100.0 + i as f64 * 0.1))
+        .collect();
+    std::fs::write(&still, rows).unwrap();
+    let o = run(&["offset", "tum", s(&still), s(&still)]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(3), "{e}");
+    assert!(e.contains("warning [weak_time_offset]"), "{e}");
+}

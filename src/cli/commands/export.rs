@@ -11,7 +11,6 @@ use trajdrift::sources::tum::write_tum;
 use trajdrift::sources::{ExtractOptions, Source};
 
 use crate::cli::args::{text_options, ExportArgs, ExportFormatArg};
-use crate::cli::EXIT_OK;
 
 /// Runs the command; returns the exit code.
 pub fn run(mut a: ExportArgs) -> Result<u8> {
@@ -64,5 +63,5 @@ pub fn run(mut a: ExportArgs) -> Result<u8> {
     for w in &extraction.warnings {
         crate::cli::warn(w);
     }
-    Ok(EXIT_OK)
+    Ok(crate::cli::exit_code(&extraction.warnings))
 }

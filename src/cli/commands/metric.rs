@@ -287,6 +287,7 @@ pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
         estimate,
         reference_label,
         estimate_label,
+        warnings,
     } = pair;
     let plots = evo.plot || evo.save_plot.is_some();
     let full_reference = (plots && evo.plot_full_ref).then(|| {
@@ -343,6 +344,10 @@ pub fn run(a: &MetricArgs, evo: &EvoMetricArgs, metric: Metric) -> Result<u8> {
     if resolved.weak {
         log.warn("warning [weak_time_offset]: the automatic time offset is not confident; none was applied");
     }
+    for w in &warnings {
+        log.warn(&crate::cli::warning_line(w));
+    }
+    code = code.max(crate::cli::exit_code(&warnings));
     log.finish(&guard)?;
     Ok(code)
 }

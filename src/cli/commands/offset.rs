@@ -7,12 +7,12 @@ use trajdrift::report::escape::escape;
 use trajdrift::standard::offsets::{compare_offset_methods, OffsetRow, OffsetWay};
 
 use crate::cli::args::OffsetArgs;
-use crate::cli::EXIT_OK;
 
 /// The widest spatial search: 6000 APE evaluations at 0.1 s.
 const MAX_SPATIAL_RANGE_S: f64 = 300.0;
 
-/// Runs the command; returns the exit code: 1 when every method failed.
+/// Runs the command; returns the exit code: 1 when every method failed, 3 when none is confident or
+/// the recording was cut short.
 pub fn run(a: OffsetArgs) -> Result<u8> {
     super::metric::validate(&a.common)?;
     trajdrift::params::Range {
@@ -24,7 +24,7 @@ pub fn run(a: OffsetArgs) -> Result<u8> {
     let inputs = super::metric::inputs(&a.common)?;
     let guard = super::metric::claim_json(&a.common)?;
     let config = inputs.offset_config()?;
-    let rows = compare_offset_methods(&config, a.spatial_range)?;
+    let (rows, warnings) = compare_offset_methods(&config, a.spatial_range)?;
     let to_stdout = a.common.json.as_deref().is_some_and(is_stdout);
     if let Some(path) = &a.common.json {
         guard.check("--json", path)?;
@@ -72,5 +72,8 @@ pub fn run(a: OffsetArgs) -> Result<u8> {
         ))
         .into());
     }
-    Ok(EXIT_OK)
+    for w in &warnings {
+        crate::cli::warn(w);
+    }
+    Ok(crate::cli::exit_code(&warnings))
 }

@@ -6,10 +6,11 @@ use trajdrift::audit::report::{AuditReport, AUDIT_KIND};
 use trajdrift::audit::restamp::{check_output, restamp};
 use trajdrift::audit::restamp_plan::{parse_domain, plan};
 use trajdrift::audit::{audit, AuditConfig};
+use trajdrift::diag::WarningCode;
 
 use crate::cli::args::RestampArgs;
 use crate::cli::progress::ReadProgress;
-use crate::cli::{EXIT_OK, EXIT_WARNING};
+use crate::cli::EXIT_WARNING;
 
 /// Reads an audit written by `trajdrift audit --json`.
 fn read_audit(path: &std::path::Path) -> Result<AuditReport> {
@@ -97,5 +98,19 @@ pub fn run(a: RestampArgs) -> Result<u8> {
             done.moved.values().sum::<u64>()
         );
     }
-    Ok(if left_alone { EXIT_WARNING } else { EXIT_OK })
+    // The copy has what the audit read: a recording cut short is said, as the audit said it.
+    let truncated: Vec<_> = report
+        .warnings
+        .iter()
+        .filter(|w| w.code == WarningCode::TruncatedRecording)
+        .cloned()
+        .collect();
+    for w in &truncated {
+        crate::cli::warn(w);
+    }
+    Ok(if left_alone {
+        EXIT_WARNING
+    } else {
+        crate::cli::exit_code(&truncated)
+    })
 }

@@ -11,7 +11,7 @@ use trajdrift::plot::{Figure, FigureData, PlotFormat};
 use crate::cli::args::{SweepArgs, SweepParamArg};
 use crate::cli::commands::eval::config_from_args;
 use crate::cli::progress::ReadProgress;
-use crate::cli::{EXIT_OK, EXIT_WARNING};
+use crate::cli::EXIT_WARNING;
 
 fn param(p: SweepParamArg) -> SweepParam {
     match p {
@@ -96,9 +96,12 @@ pub fn run(a: SweepArgs) -> Result<u8> {
             trajdrift::report::escape::escape(r.error.as_deref().unwrap_or(""))
         );
     }
+    for w in &sweep.warnings {
+        crate::cli::warn(w);
+    }
     Ok(if sweep.rows.iter().any(|r| r.error.is_some()) {
         EXIT_WARNING
     } else {
-        EXIT_OK
+        crate::cli::exit_code(&sweep.warnings)
     })
 }

@@ -17,14 +17,19 @@ use trajdrift::output::OutputGuard;
 use trajdrift::plot::evo::PlotMode;
 use trajdrift::report::json::TimeOffsetStatus;
 use trajdrift::sources::text::TextFormat;
+use trajdrift::sources::Warning;
 use trajdrift::trajectory::Trajectory;
 
 use crate::cli::evo_args::{ignored_notes, TrajArgs};
 use crate::cli::evo_log::EvoLog;
 use crate::cli::{EXIT_OK, EXIT_WARNING};
 
-/// The trajectories of the command line: (trajectories, reference).
-fn read(a: &TrajArgs) -> Result<(Vec<TrajInput>, Option<TrajInput>)> {
+/// The trajectories of the command line: (trajectories, reference), and what reading them warns of
+/// (a recording cut short).
+type Read = (Vec<TrajInput>, Option<TrajInput>, Vec<Warning>);
+
+/// The trajectories of the command line.
+fn read(a: &TrajArgs) -> Result<Read> {
     let form = a.inputs.first().map(String::as_str);
     let text_form = match form {
         Some("tum") => Some(Some(TextFormat::Tum)),
@@ -45,9 +50,9 @@ fn read(a: &TrajArgs) -> Result<(Vec<TrajInput>, Option<TrajInput>)> {
         if let Some(r) = &a.reference {
             all.insert(0, r.clone());
         }
-        let mut loaded = load_topics(Path::new(recording), &all)?;
+        let (mut loaded, warnings) = load_topics(Path::new(recording), &all)?;
         let reference = a.reference.as_ref().map(|_| loaded.remove(0));
-        return Ok((loaded, reference));
+        return Ok((loaded, reference, warnings));
     }
     let (files, format) = match text_form {
         Some(f) => (&a.inputs[1..], f),
@@ -73,7 +78,7 @@ fn read(a: &TrajArgs) -> Result<(Vec<TrajInput>, Option<TrajInput>)> {
             t.name = t.path.display().to_string();
         }
     }
-    Ok((ts, reference))
+    Ok((ts, reference, Vec::new()))
 }
 
 /// `--time-offset auto`: eval's offset search between the reference and `t`.
@@ -127,8 +132,11 @@ pub fn run(a: TrajArgs) -> Result<u8> {
     if let Some(l) = &a.usability.logfile {
         guard.check("--logfile", l)?;
     }
-    let (mut ts, reference) = read(&a)?;
-    let mut code = EXIT_OK;
+    let (mut ts, reference, warnings) = read(&a)?;
+    for w in &warnings {
+        log.warn(&crate::cli::warning_line(w));
+    }
+    let mut code = crate::cli::exit_code(&warnings);
     resample(&a, &mut ts, &log)?;
     if a.merge {
         if ts.iter().any(|t| !t.stamped) {

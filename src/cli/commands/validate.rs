@@ -82,7 +82,7 @@ fn like(a: &ValidateArgs, guard: &mut OutputGuard) -> Result<u8> {
     let read = ReadProgress::new(total, false);
     let shape = trajdrift::validate::like::recording_shape(&config, &|b| read.update(b));
     read.finish();
-    let shape = shape?;
+    let (shape, warnings) = shape?;
     let n = a.missions as usize;
     let bar = ReadProgress::counting(n as u64, false, "missions");
     let grades = trajdrift::validate::like::run_like(&shape, n, a.seed, &|_, _| bar.inc());
@@ -105,5 +105,8 @@ fn like(a: &ValidateArgs, guard: &mut OutputGuard) -> Result<u8> {
     if !a.json.as_deref().is_some_and(is_stdout) {
         emit(&trajdrift::validate::like::like_table(&shape, &grades))?;
     }
-    Ok(EXIT_OK)
+    for w in &warnings {
+        crate::cli::warn(w);
+    }
+    Ok(crate::cli::exit_code(&warnings))
 }

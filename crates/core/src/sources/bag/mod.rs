@@ -92,14 +92,21 @@ impl BagSource {
         let mut counts: HashMap<u32, u64> = HashMap::new();
         let (mut header, mut data) = (Vec::new(), Vec::new());
         let mut pos = self.index_pos;
-        while let Next::Record { data_len } = records::read_record(
-            &mut r,
-            &mut header,
-            &self.path,
-            self.size.saturating_sub(pos),
-        )
-        .ok()?
-        {
+        // An index cut short (the file ends inside it) lists only some of the chunks: no index then,
+        // and the pass counts what the readers read.
+        loop {
+            let data_len = match records::read_record(
+                &mut r,
+                &mut header,
+                &self.path,
+                self.size.saturating_sub(pos),
+            )
+            .ok()?
+            {
+                Next::Record { data_len } => data_len,
+                Next::End => break,
+                Next::Truncated => return None,
+            };
             pos += 8 + header.len() as u64 + data_len as u64;
             data.resize(data_len as usize, 0);
             r.read_exact(&mut data).ok()?;

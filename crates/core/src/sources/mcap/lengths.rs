@@ -142,24 +142,34 @@ pub fn check_record(opcode: u8, data: &[u8]) -> Result<(), String> {
     }
 }
 
+/// The footer record (opcode, u64 length 20, summary_start, summary_offset_start, crc) and the end
+/// magic after it.
+const FOOTER: u64 = 1 + 8 + 20 + 8;
+
+/// The footer and end magic of an MCAP `file` of `size` bytes; `None` when the file does not end with
+/// them (a file cut short, even after its Data End record).
+pub fn read_footer(
+    file: &mut std::fs::File,
+    size: u64,
+) -> std::io::Result<Option<[u8; FOOTER as usize]>> {
+    if size < 8 + FOOTER {
+        return Ok(None);
+    }
+    let mut footer = [0u8; FOOTER as usize];
+    file.seek(SeekFrom::Start(size - FOOTER))?;
+    file.read_exact(&mut footer)?;
+    Ok((footer[0] == op::FOOTER && footer[29..] == *mcap::MAGIC).then_some(footer))
+}
+
 /// Checks every record of the summary section of `path` (found through the footer) with
 /// [`check_record`]; `Err` says what is damaged. A file without a footer or summary passes (there is
 /// nothing the summary reader would parse). `limit` bounds the section read into memory.
 pub fn check_summary(path: &Path, limit: u64) -> Result<(), String> {
     let mut file = std::fs::File::open(path).map_err(|e| e.to_string())?;
     let size = file.metadata().map_err(|e| e.to_string())?.len();
-    // Footer record: opcode, u64 length (20), summary_start, summary_offset_start, crc; then magic.
-    const FOOTER: u64 = 1 + 8 + 20 + 8;
-    if size < 8 + FOOTER {
+    let Some(footer) = read_footer(&mut file, size).map_err(|e| e.to_string())? else {
         return Ok(());
-    }
-    let mut footer = [0u8; FOOTER as usize];
-    file.seek(SeekFrom::Start(size - FOOTER))
-        .and_then(|_| file.read_exact(&mut footer))
-        .map_err(|e| e.to_string())?;
-    if footer[0] != op::FOOTER || footer[29..] != *mcap::MAGIC {
-        return Ok(());
-    }
+    };
     let summary_start = u64::from_le_bytes(footer[9..17].try_into().unwrap_or([0; 8]));
     let footer_start = size - FOOTER;
     if summary_start == 0 {

@@ -11,7 +11,7 @@ use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
 
-use super::lengths::check_record;
+use super::lengths::{check_record, read_footer};
 use mcap::records::{op, Record};
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use mcap::McapError;
@@ -89,7 +89,17 @@ where
                 op::MESSAGE => pass.message(data, &mut on_message)?,
                 op::SCHEMA => pass.schema(data)?,
                 op::CHANNEL => pass.channel(data, &mut select)?,
-                op::DATA_END => break,
+                op::DATA_END => {
+                    // The data is whole, but a file without its footer and end magic was still cut
+                    // short (the summary after the data, or its last bytes, are missing).
+                    if read_footer(&mut file, file_size)
+                        .map_err(|e| Error::io(path, e))?
+                        .is_none()
+                    {
+                        pass.out.truncated_at = Some(file_size);
+                    }
+                    break;
+                }
                 _ => {}
             },
         }
