@@ -85,7 +85,7 @@ pub fn expand_files(recordings: &[PathBuf]) -> Result<Vec<PathBuf>> {
 }
 
 /// Topic → files, from each file's index (or one pass that decodes nothing, without an index).
-fn topic_files(files: &[PathBuf]) -> Result<BTreeMap<String, Vec<PathBuf>>> {
+pub(crate) fn topic_files(files: &[PathBuf]) -> Result<BTreeMap<String, Vec<PathBuf>>> {
     let mut map: BTreeMap<String, Vec<PathBuf>> = BTreeMap::new();
     for f in files {
         let rec = crate::sources::open::open_recording(f)?;

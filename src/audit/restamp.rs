@@ -214,11 +214,21 @@ impl<W: Write + Seek> Annotations<W> for Restamper<'_> {
     }
 }
 
-/// Claims `out` (`--out`) against the inputs: not an input, not inside an input folder (a mission
-/// folder), and not an existing file without `force`.
-pub fn check_output(recordings: &[PathBuf], out: &Path, force: bool) -> Result<()> {
+/// Claims `out` (`--out`) against the inputs (the recordings and `others`, such as the `--audit`
+/// file): not an input, not inside an input folder (a mission folder), and not an existing file
+/// without `force`.
+pub fn check_output(
+    recordings: &[PathBuf],
+    others: &[&Path],
+    out: &Path,
+    force: bool,
+) -> Result<()> {
     let files = super::discover::expand_files(recordings)?;
-    OutputGuard::new(recordings.iter().chain(&files)).claim("--out", out)?;
+    let mut guard = OutputGuard::new(recordings.iter().chain(&files));
+    for p in others {
+        guard.add(p);
+    }
+    guard.claim("--out", out)?;
     if out.exists() && !force {
         return Err(Error::InvalidArgument(format!(
             "{}: exists; pass --force to replace it",
@@ -286,7 +296,7 @@ pub fn restamp(
     force: bool,
     progress: Progress<'_>,
 ) -> Result<RestampOutcome> {
-    check_output(recordings, out, force)?;
+    check_output(recordings, &[], out, force)?;
     let files = super::discover::expand_files(recordings)?;
     let input = Input::open(&files)?;
     let mut restamper = Restamper {

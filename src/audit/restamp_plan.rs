@@ -176,6 +176,20 @@ pub fn plan(
     })
 }
 
+/// The topics of `audit`'s sources that `files` do not hold: an audit of another recording when there
+/// are any (restamping by it would move nothing, or the wrong messages).
+pub fn missing_topics(audit: &AuditReport, files: &[PathBuf]) -> Result<Vec<String>> {
+    let held = super::discover::topic_files(files)?;
+    let mut missing: Vec<String> = Vec::new();
+    for s in &audit.sources {
+        let topic = message_topic(&s.topic);
+        if !held.contains_key(topic) && !missing.iter().any(|m| m == topic) {
+            missing.push(topic.to_string());
+        }
+    }
+    Ok(missing)
+}
+
 /// The sources that can move: not in the reference's domain, with a confident clock.
 fn movable_sources<'a>(audit: &'a AuditReport, notes: &mut Vec<String>) -> Vec<SourceRef<'a>> {
     let mut movable = Vec::new();

@@ -312,12 +312,12 @@ pub fn run_audit_batch(
 
 /// Every output claimed before any work: the summary, each mission's audit and page.
 fn claim_outputs(missions: &[AuditMission], out_dir: &Path, html: bool) -> Result<()> {
+    let mut guard = OutputGuard::new(missions.iter().flat_map(|m| m.recordings.clone()));
+    guard.claim_dir("--out", out_dir)?;
     std::fs::create_dir_all(out_dir).map_err(|e| Error::Output {
         path: out_dir.to_path_buf(),
         detail: e.to_string(),
     })?;
-    let mut guard = OutputGuard::new(missions.iter().flat_map(|m| m.recordings.clone()));
-    guard.claim_dir("--out", out_dir)?;
     for name in ["audit-summary.json", "audit-summary.md"] {
         guard.claim("--out", &out_dir.join(name))?;
     }

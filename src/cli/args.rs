@@ -478,7 +478,7 @@ pub struct SimulateArgs {
     /// Add an unrelated bulk channel (like lidar) totalling about this many MiB.
     #[arg(long, value_name = "MIB", default_value_t = 0)]
     pub bulk_mib: u64,
-    /// Replace an existing output.
+    /// Replace existing outputs (OUT and --truth).
     #[arg(long)]
     pub force: bool,
     /// Clock rate error of the estimate, ppm (positive: its clock runs fast), in [-10000, 10000].

@@ -30,7 +30,8 @@ pub fn expand(argv: Vec<OsString>) -> Vec<OsString> {
 
 /// Reads the command line once with clap; when it runs `ape`, `rpe`, `res` or `traj` with `-c FILE`,
 /// returns it rewritten: the arguments given ([`given_arguments`]) less those the JSON sets, then the
-/// JSON's ([`config_arguments`]); keys that name no flag are named once on stderr.
+/// JSON's ([`config_arguments`]), then `-c FILE` itself; keys that name no flag are named once on
+/// stderr.
 fn try_expand(argv: &[OsString]) -> anyhow::Result<Option<Vec<OsString>>> {
     let cmd = Cli::command();
     let Ok(matches) = cmd.clone().try_get_matches_from(argv) else {
@@ -63,6 +64,10 @@ fn try_expand(argv: &[OsString]) -> anyhow::Result<Option<Vec<OsString>>> {
     let mut out: Vec<OsString> = vec![argv[0].clone(), name.into()];
     out.extend(positionals.into_iter().flat_map(|p| p.1));
     out.extend(options);
+    // `-c FILE` stays on the line: the command names it to the output guard as an input.
+    let mut config_flag = OsString::from("--config=");
+    config_flag.push(&path);
+    out.push(config_flag);
     Ok(Some(out))
 }
 
@@ -184,7 +189,7 @@ fn config_arguments(
             notes.push(key.clone());
             continue;
         };
-        if a.is_positional() {
+        if a.is_positional() || a.get_id() == "config" {
             notes.push(key.clone());
             continue;
         }

@@ -425,3 +425,220 @@ fn io_errors_name_their_cause_and_what_to_do() {
     // Read-only and busy are unit-tested on the error codes (`error::tests`): no test machine can
     // be counted on to have a read-only file system or a busy file to write to.
 }
+
+/// Runs `args` in the fixture's folder (outputs named by the data, such as `traj --save_as_tum`'s,
+/// go there), expects a one-line refusal (exit 2) containing `says`, and no new file in it.
+#[track_caller]
+fn refused_here(f: &Fixture, args: &[&str], says: &str) {
+    let before = f.names("");
+    let o = crate::robust_support::bin()
+        .current_dir(f.dir.path())
+        .args(args)
+        .output()
+        .unwrap();
+    let e = stderr(&o);
+    expect_code(&o, &[2], &format!("{args:?}"));
+    assert!(e.contains(says), "{args:?}: {e}");
+    assert_eq!(e.lines().count(), 1, "{args:?}: {e}");
+    assert_eq!(f.names(""), before, "{args:?} wrote something");
+}
+
+#[test]
+fn every_file_a_command_reads_is_an_input() {
+    let f = Fixture::new();
+    std::fs::write(f.p("conf.json"), "{\"align\": true}\n").unwrap();
+    std::fs::write(
+        f.p("tf.json"),
+        "{\"x\": 0, \"y\": 0, \"z\": 0, \"qx\": 0, \"qy\": 0, \"qz\": 0, \"qw\": 1}\n",
+    )
+    .unwrap();
+    let o = run(&[
+        "audit",
+        s(&f.p("in.mcap")),
+        "--json",
+        s(&f.p("a.json")),
+        "-q",
+    ]);
+    expect_code(&o, &[0, 3], "audit");
+    let snap = Snapshot::of(&[f.dir.path()]);
+    let (r, e) = (f.p("ref.tum"), f.p("est.tum"));
+    let (conf, tf, audit) = (f.p("conf.json"), f.p("tf.json"), f.p("a.json"));
+    let (r, e, conf, tf, audit, rec) = (s(&r), s(&e), s(&conf), s(&tf), s(&audit), f.p("in.mcap"));
+    let says = "writing it would destroy the input";
+    for flag in ["--json", "--logfile"] {
+        refused(&f, &["ape", "tum", r, e, "-c", conf, flag, conf], says);
+    }
+    refused(
+        &f,
+        &["rpe", "tum", r, e, "--config", conf, "--logfile", conf],
+        says,
+    );
+    for flag in ["--save_table", "--logfile"] {
+        refused(
+            &f,
+            &["traj", "tum", e, "--transform_left", tf, flag, tf],
+            says,
+        );
+        refused(
+            &f,
+            &["traj", "tum", e, "--transform_right", tf, flag, tf],
+            says,
+        );
+        refused(&f, &["traj", "tum", e, "-c", conf, flag, conf], says);
+    }
+    refused(
+        &f,
+        &[
+            "restamp",
+            s(&rec),
+            "--audit",
+            audit,
+            "--out",
+            audit,
+            "--force",
+        ],
+        says,
+    );
+    snap.assert_unchanged();
+}
+
+#[cfg(unix)]
+#[test]
+fn files_read_through_a_folder_are_inputs_wherever_they_are() {
+    let f = Fixture::new();
+    std::fs::copy(f.p("in.mcap"), f.p("victim.mcap")).unwrap();
+    // A mission folder holding a symlink out of it.
+    std::fs::create_dir(f.p("ml")).unwrap();
+    std::os::unix::fs::symlink("../victim.mcap", f.p("ml/a.mcap")).unwrap();
+    // A rosbag2 folder whose metadata.yaml names a file outside it.
+    std::fs::create_dir(f.p("rb")).unwrap();
+    std::fs::write(
+        f.p("rb/metadata.yaml"),
+        "rosbag2_bagfile_information:\n  storage_identifier: mcap\n  relative_file_paths:\n  - ../victim.mcap\n",
+    )
+    .unwrap();
+    let snap = Snapshot::of(&[f.dir.path()]);
+    let victim = f.p("victim.mcap");
+    for folder in ["ml", "rb", "rb/metadata.yaml"] {
+        let rec = f.p(folder);
+        refused(
+            &f,
+            &eval_args(s(&rec), &["--json", s(&victim)]),
+            "writing it would destroy the input",
+        );
+        refused(
+            &f,
+            &["topics", s(&rec), "--json", s(&victim)],
+            "writing it would destroy the input",
+        );
+    }
+    snap.assert_unchanged();
+}
+
+#[test]
+fn trajectories_of_one_name_are_not_converted_into_one_file() {
+    let f = Fixture::new();
+    for d in ["d1", "d2"] {
+        std::fs::create_dir(f.p(d)).unwrap();
+        std::fs::copy(f.p("est.tum"), f.p(&format!("{d}/est.tum"))).unwrap();
+    }
+    let snap = Snapshot::of(&[f.dir.path()]);
+    let two = ["traj", "tum", "d1/est.tum", "d2/est.tum"];
+    for (extra, says) in [
+        (&["--save_as_tum"][..], "would both be written to est.tum"),
+        (
+            &["--save_as_kitti"][..],
+            "would both be written to est.kitti",
+        ),
+        (
+            &["--save_as_mcap", "t.mcap"][..],
+            "would both be written on the topic /est of t.mcap",
+        ),
+    ] {
+        refused_here(&f, &[&two[..], extra].concat(), says);
+    }
+    snap.assert_unchanged();
+}
+
+#[test]
+fn simulate_replaces_an_existing_truth_only_with_force() {
+    let f = Fixture::new();
+    std::fs::write(f.p("truth.json"), "old").unwrap();
+    let (out, truth) = (f.p("s.mcap"), f.p("truth.json"));
+    let args = ["simulate", s(&out), "--truth", s(&truth), "--duration", "5"];
+    refused(&f, &args, "--truth");
+    refused(&f, &args, "pass --force to replace it");
+    assert_eq!(std::fs::read(&truth).unwrap(), b"old");
+    let o = run(&[&args[..], &["--force"]].concat());
+    expect_code(&o, &[0], "simulate --force");
+    assert_ne!(std::fs::read(&truth).unwrap(), b"old");
+}
+
+#[test]
+fn a_folder_output_that_is_a_file_is_refused_by_name() {
+    let f = Fixture::new();
+    std::fs::write(f.p("x.mcap"), "taken").unwrap();
+    let snap = Snapshot::of(&[f.dir.path()]);
+    let (r, e, x) = (f.p("ref.tum"), f.p("est.tum"), f.p("x.mcap"));
+    let says = "is a file, expected a folder; pass a new or existing folder";
+    refused(&f, &["man", "--out", s(&r)], says);
+    refused(
+        &f,
+        &[
+            "simulate",
+            s(&x),
+            "--grandtour",
+            "--force",
+            "--duration",
+            "5",
+        ],
+        says,
+    );
+    refused(&f, &eval_args(s(&f.p("in.mcap")), &["--plot", s(&e)]), says);
+    refused(
+        &f,
+        &eval_args(s(&f.p("in.mcap")), &["--plot", "/dev/null"]),
+        "/dev/null: is not a folder",
+    );
+    snap.assert_unchanged();
+}
+
+#[test]
+fn restamp_refuses_the_audit_of_another_recording() {
+    let f = Fixture::new();
+    let (rec, audit, other) = (f.p("in.mcap"), f.p("a.json"), f.p("other.json"));
+    let o = run(&["audit", s(&rec), "--json", s(&audit), "-q"]);
+    expect_code(&o, &[0, 3], "audit");
+    // The same audit, of a recording whose estimate is on another topic.
+    let mut v: serde_json::Value = serde_json::from_slice(&std::fs::read(&audit).unwrap()).unwrap();
+    for src in v["sources"].as_array_mut().unwrap() {
+        if src["topic"] == "/estimate/odom" {
+            src["topic"] = "/lio/odom".into();
+        }
+    }
+    std::fs::write(&other, serde_json::to_vec(&v).unwrap()).unwrap();
+    let out = f.p("r.mcap");
+    let args = [
+        "restamp",
+        s(&rec),
+        "--audit",
+        s(&other),
+        "--out",
+        s(&out),
+        "-q",
+    ];
+    refused(&f, &args, "an audit of another recording");
+    refused(&f, &args, "/lio/odom");
+    // Its own audit is taken.
+    let o = run(&[
+        "restamp",
+        s(&rec),
+        "--audit",
+        s(&audit),
+        "--out",
+        s(&out),
+        "-q",
+    ]);
+    expect_code(&o, &[0, 3], "restamp with its own audit");
+    assert!(out.is_file());
+}

@@ -19,15 +19,28 @@ pub fn request(a: &SourceArgs) -> SourceRequest {
     }
 }
 
-/// Refuses outputs over an input (a recording, a file of a mission folder, or inside that folder).
-pub fn guard(recordings: &[std::path::PathBuf]) -> Result<OutputGuard> {
+/// Refuses outputs over an input (a recording, a file of a mission folder, or inside that folder, a
+/// preset file).
+pub fn guard(recordings: &[std::path::PathBuf], sources: &SourceArgs) -> Result<OutputGuard> {
     let files = trajdrift::audit::discover::expand_files(recordings)?;
-    Ok(OutputGuard::new(recordings.iter().chain(&files)))
+    let mut guard = OutputGuard::new(recordings.iter().chain(&files));
+    if let Some(p) = preset_file(sources) {
+        guard.add(p);
+    }
+    Ok(guard)
+}
+
+/// `--preset` when it names a file (not a built-in preset).
+pub fn preset_file(a: &SourceArgs) -> Option<&std::path::Path> {
+    a.preset
+        .as_deref()
+        .map(std::path::Path::new)
+        .filter(|p| p.is_file())
 }
 
 /// Runs the command; returns the exit code.
 pub fn run(a: AuditArgs) -> Result<u8> {
-    let mut guard = guard(&a.recording)?;
+    let mut guard = guard(&a.recording, &a.sources)?;
     for (flag, out) in [("--json", &a.json), ("--html", &a.html)] {
         if let Some(out) = out {
             guard.claim(flag, out)?;

@@ -136,7 +136,15 @@ fn options_from_args(a: &BatchArgs) -> Result<BatchOptions> {
             }),
             html: a.html,
         },
-        inputs: vec![a.input.clone()],
+        // The manifest or folder, and a preset file.
+        inputs: std::iter::once(a.input.clone())
+            .chain(
+                a.preset
+                    .iter()
+                    .map(std::path::PathBuf::from)
+                    .filter(|p| p.is_file()),
+            )
+            .collect(),
     })
 }
 

@@ -10,7 +10,7 @@ use clap::CommandFactory;
 use clap_mangen::roff::{roman, Roff};
 use clap_mangen::Man;
 
-use trajdrift::output::write_output;
+use trajdrift::output::{write_output, OutputGuard};
 
 use crate::cli::args::{Cli, ManArgs};
 use crate::cli::EXIT_OK;
@@ -22,6 +22,7 @@ pub fn run(a: ManArgs) -> Result<u8> {
     match &a.out {
         None => crate::cli::emit(&page(&cmd)?)?,
         Some(dir) => {
+            OutputGuard::default().claim_dir("--out", dir)?;
             std::fs::create_dir_all(dir).map_err(|e| trajdrift::Error::Output {
                 path: dir.clone(),
                 detail: e.to_string(),

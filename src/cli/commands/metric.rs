@@ -390,7 +390,11 @@ fn note_ignored(log: &EvoLog, evo: &EvoMetricArgs) {
 
 /// Every output claimed before any work: never an input, never two outputs on one path.
 fn claim_outputs(a: &MetricArgs, evo: &EvoMetricArgs) -> Result<OutputGuard> {
-    let mut guard = OutputGuard::new(input_paths(a));
+    let mut guard = OutputGuard::new(
+        input_paths(a)
+            .into_iter()
+            .chain(evo.usability.config.clone()),
+    );
     for (flag, out) in [
         ("--json", a.json.as_deref()),
         ("--save_results", evo.save_results.as_deref()),

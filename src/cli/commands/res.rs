@@ -25,13 +25,13 @@ pub fn run(a: ResArgs) -> Result<u8> {
         )
         .into());
     }
-    let guard = OutputGuard::new(&a.result_files);
+    let mut guard = OutputGuard::new(a.result_files.iter().chain(&a.usability.config));
     for (flag, out) in [
         ("--save_table", a.save_table.as_deref()),
         ("--logfile", a.usability.logfile.as_deref()),
     ] {
         if let Some(out) = out {
-            guard.check(flag, out)?;
+            guard.claim(flag, out)?;
         }
     }
     let loaded = load(&a.result_files, a.use_filenames)?;

@@ -4,7 +4,7 @@ use anyhow::{anyhow, Result};
 
 use trajdrift::audit::report::{AuditReport, AUDIT_KIND};
 use trajdrift::audit::restamp::{check_output, restamp};
-use trajdrift::audit::restamp_plan::{parse_domain, plan};
+use trajdrift::audit::restamp_plan::{missing_topics, parse_domain, plan};
 use trajdrift::audit::{audit, AuditConfig};
 use trajdrift::diag::WarningCode;
 
@@ -37,7 +37,14 @@ fn read_audit(path: &std::path::Path) -> Result<AuditReport> {
 
 /// Runs the command; returns the exit code.
 pub fn run(a: RestampArgs) -> Result<u8> {
-    check_output(&a.recording, &a.out, a.force)?;
+    // The --audit file and a preset file are inputs too.
+    let others: Vec<&std::path::Path> = a
+        .audit
+        .iter()
+        .map(|p| p.as_path())
+        .chain(crate::cli::commands::audit::preset_file(&a.sources))
+        .collect();
+    check_output(&a.recording, &others, &a.out, a.force)?;
     let domains = a
         .domain
         .iter()
@@ -69,6 +76,17 @@ pub fn run(a: RestampArgs) -> Result<u8> {
         }
     };
     let files = trajdrift::audit::discover::expand_files(&a.recording)?;
+    if let Some(path) = &a.audit {
+        let missing = missing_topics(&report, &files)?;
+        if !missing.is_empty() {
+            return Err(trajdrift::Error::InvalidArgument(format!(
+                "--audit {}: an audit of another recording (its sources {} are not in the RECORDING); give the audit of this recording, or leave --audit out to audit it now",
+                path.display(),
+                trajdrift::report::escape::escape(&missing.join(", "))
+            ))
+            .into());
+        }
+    }
     let plan = plan(&report, &files, &domains)?;
     let progress = ReadProgress::new(total, a.quiet);
     let done = restamp(&a.recording, &report, &plan, &a.out, a.force, &|b| {

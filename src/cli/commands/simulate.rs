@@ -144,6 +144,12 @@ pub fn run(a: SimulateArgs) -> Result<u8> {
             a.out.display()
         ))));
     }
+    if let Some(truth) = a.truth.as_ref().filter(|t| t.exists() && !a.force) {
+        return Err(anyhow!(trajdrift::Error::InvalidArgument(format!(
+            "--truth {}: exists; pass --force to replace it",
+            truth.display()
+        ))));
+    }
     claim_outputs(&a)?;
     let config = MissionConfig {
         seed: a.seed,

@@ -128,9 +128,17 @@ pub fn run(a: TrajArgs) -> Result<u8> {
     super::metric::check_motion_filter(a.motion_filter.as_deref())?;
     let mut inputs: Vec<PathBuf> = a.inputs.iter().map(PathBuf::from).collect();
     inputs.extend(a.reference.iter().map(PathBuf::from));
-    let guard = OutputGuard::new(&inputs);
-    if let Some(l) = &a.usability.logfile {
-        guard.check("--logfile", l)?;
+    inputs.extend(a.transform_left.iter().map(PathBuf::from));
+    inputs.extend(a.transform_right.iter().map(PathBuf::from));
+    inputs.extend(a.usability.config.iter().cloned());
+    let mut guard = OutputGuard::new(&inputs);
+    for (flag, out) in [
+        ("--logfile", a.usability.logfile.as_deref()),
+        ("--save_table", a.save_table.as_deref()),
+    ] {
+        if let Some(out) = out {
+            guard.claim(flag, out)?;
+        }
     }
     let (mut ts, reference, warnings) = read(&a)?;
     for w in &warnings {
@@ -154,6 +162,7 @@ pub fn run(a: TrajArgs) -> Result<u8> {
     transform_all(&a, &mut ts, &log)?;
     project(&a, &mut ts);
     let all: Vec<&TrajInput> = ts.iter().chain(reference.iter()).collect();
+    claim_conversions(&a, &all, &mut guard)?;
     code = code.max(report_info(&a, &all, &log)?);
     if let Some(path) = &a.save_table {
         guard.write("--save_table", path, info_csv(&all).as_bytes())?;
@@ -376,6 +385,60 @@ fn stem(t: &TrajInput) -> String {
     trajdrift::output::names::file_stem(&t.name.replace('/', "_"))
 }
 
+/// The file `--save_as_mcap` (or `--save_as_bag`/`--save_as_bag2`) writes.
+fn mcap_out(a: &TrajArgs) -> Option<PathBuf> {
+    match (&a.save_as_mcap, a.save_as_bag || a.save_as_bag2) {
+        (Some(p), _) => Some(p.clone()),
+        (None, true) => Some(PathBuf::from("trajectories.mcap")),
+        _ => None,
+    }
+}
+
+/// Claims every file the conversions write before any is written: refused when one is an input or
+/// another output, and when two trajectories of one name (`d1/est.tum` and `d2/est.tum`) would be
+/// written to one file, or on one topic of the MCAP (evo asks before replacing the first, or with
+/// --no_warnings replaces it).
+fn claim_conversions(a: &TrajArgs, all: &[&TrajInput], guard: &mut OutputGuard) -> Result<()> {
+    let twice = |flag: &str, x: &TrajInput, y: &TrajInput, into: String| {
+        trajdrift::Error::InvalidArgument(format!(
+            "{flag}: {} and {} would both be written {into}; rename one of the files (its name names the output)",
+            x.path.display(),
+            y.path.display()
+        ))
+    };
+    for (flag, on, ext) in [
+        ("--save_as_tum", a.save_as_tum, "tum"),
+        ("--save_as_kitti", a.save_as_kitti, "kitti"),
+    ] {
+        if !on {
+            continue;
+        }
+        for (i, t) in all.iter().enumerate() {
+            let path = PathBuf::from(format!("{}.{ext}", stem(t)));
+            if let Some(first) = all[..i].iter().find(|u| stem(u) == stem(t)) {
+                return Err(twice(flag, first, t, format!("to {}", path.display())).into());
+            }
+            guard.claim(flag, &path)?;
+        }
+    }
+    if let Some(path) = mcap_out(a) {
+        for (i, t) in all.iter().enumerate() {
+            let topic = topic_name(&t.name);
+            if let Some(first) = all[..i].iter().find(|u| topic_name(&u.name) == topic) {
+                return Err(twice(
+                    "--save_as_mcap",
+                    first,
+                    t,
+                    format!("on the topic {topic} of {}", path.display()),
+                )
+                .into());
+            }
+        }
+        guard.claim("--save_as_mcap", &path)?;
+    }
+    Ok(())
+}
+
 /// Conversions: NAME.tum / NAME.kitti in the current folder, and one MCAP for all
 /// (`--save_as_mcap`, or `--save_as_bag`/`--save_as_bag2`, which evo writes as bags).
 fn save_conversions(
@@ -403,15 +466,10 @@ fn save_conversions(
             log.note(&format!("{}: written to {}", t.name, path.display()));
         }
     }
-    let mcap_out = match (&a.save_as_mcap, a.save_as_bag || a.save_as_bag2) {
-        (Some(p), _) => Some(p.clone()),
-        (None, true) => {
-            log.warn("note: --save_as_bag/--save_as_bag2: trajdrift writes MCAP (ROS 2 PoseStamped), not a bag: trajectories.mcap");
-            Some(PathBuf::from("trajectories.mcap"))
-        }
-        _ => None,
-    };
-    if let Some(path) = mcap_out {
+    if a.save_as_mcap.is_none() && (a.save_as_bag || a.save_as_bag2) {
+        log.warn("note: --save_as_bag/--save_as_bag2: trajdrift writes MCAP (ROS 2 PoseStamped), not a bag: trajectories.mcap");
+    }
+    if let Some(path) = mcap_out(a) {
         let list: Vec<(String, &Trajectory)> = all
             .iter()
             .map(|t| (topic_name(&t.name), &t.trajectory))

@@ -71,21 +71,35 @@ impl OutputGuard {
     }
 
     /// Adds one input. A rosbag2 recording's `metadata.yaml` also adds its folder: every file in it
-    /// is part of the recording.
+    /// is part of the recording. A folder also adds the files that are read through it, wherever
+    /// they are (a symlink, a `../` path): the split files its `metadata.yaml` names, or the
+    /// recordings of a mission folder.
     pub fn add(&mut self, path: &Path) {
         if is_stdout(path) || path.as_os_str().is_empty() {
             return;
         }
         let meta = std::fs::metadata(path).ok();
+        let resolved = resolve(path);
+        let is_dir = meta.as_ref().is_some_and(|m| m.is_dir());
+        // A folder reached twice (a symlink loop) is expanded once.
+        let seen = is_dir
+            && self
+                .inputs
+                .iter()
+                .any(|i| i.is_dir && i.resolved == resolved);
         self.inputs.push(InputId {
             given: path.to_path_buf(),
-            resolved: resolve(path),
+            resolved,
             file_id: meta.as_ref().and_then(file_id),
-            is_dir: meta.as_ref().is_some_and(|m| m.is_dir()),
+            is_dir,
         });
         if path.file_name().is_some_and(|n| n == "metadata.yaml") {
             if let Some(dir) = path.parent().filter(|d| d.is_dir()) {
                 self.add(dir);
+            }
+        } else if is_dir && !seen {
+            for file in read_through(path) {
+                self.add(&file);
             }
         }
     }
@@ -137,15 +151,28 @@ impl OutputGuard {
     }
 
     /// Claims the folder `dir` for `flag` (`--plot DIR`, a batch's `--out`): not an input, not inside
-    /// an input folder, not another output. The files written into it are claimed one by one.
+    /// an input folder, not another output, and a folder or nothing yet (not a file, not a device).
+    /// The files written into it are claimed one by one.
     pub fn claim_dir(&mut self, flag: &str, dir: &Path) -> Result<()> {
-        if is_stdout(dir) {
+        if is_stdout(dir) || is_stderr(dir) {
             return Err(Error::InvalidArgument(format!(
                 "{flag} takes a folder, not `{}`",
                 dir.display()
             )));
         }
-        self.claim_as(flag, dir)
+        self.claim_as(flag, dir)?;
+        match std::fs::metadata(dir) {
+            Ok(m) if !m.is_dir() => Err(Error::InvalidArgument(format!(
+                "{flag} {}: is {}, expected a folder; pass a new or existing folder",
+                dir.display(),
+                if m.is_file() {
+                    "a file"
+                } else {
+                    "not a folder (a device, a FIFO)"
+                }
+            ))),
+            _ => Ok(()),
+        }
     }
 
     fn claim_as(&mut self, flag: &str, out: &Path) -> Result<()> {
@@ -176,6 +203,19 @@ impl OutputGuard {
     pub fn write(&self, flag: &str, out: &Path, bytes: &[u8]) -> Result<()> {
         self.check(flag, out)?;
         write_output(out, bytes)
+    }
+}
+
+/// The files and folders read through the folder `dir`: the split files its `metadata.yaml` names (a
+/// rosbag2 folder), or the recordings in it (a mission folder). Nothing when it cannot be read: the
+/// command then fails to read it too.
+fn read_through(dir: &Path) -> Vec<PathBuf> {
+    if dir.join("metadata.yaml").is_file() {
+        crate::sources::rosbag2::metadata::read(dir)
+            .map(|m| m.relative_file_paths.iter().map(|f| dir.join(f)).collect())
+            .unwrap_or_default()
+    } else {
+        crate::sources::open::recordings_in(dir).unwrap_or_default()
     }
 }
 
@@ -416,6 +456,66 @@ mod tests {
             assert!(g.check("--html", &bag.join("new.html")).is_err());
             assert!(g.check("--html", &dir.path().join("r.html")).is_ok());
         }
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn the_files_read_through_a_folder_are_inputs_wherever_they_are() {
+        let dir = tempfile::tempdir().unwrap();
+        let (victim, victim2) = (dir.path().join("victim.mcap"), dir.path().join("v2.mcap"));
+        std::fs::write(&victim, "mcap").unwrap();
+        std::fs::write(&victim2, "mcap").unwrap();
+        // A mission folder holding a symlink out of it.
+        let mission = dir.path().join("ml");
+        std::fs::create_dir(&mission).unwrap();
+        std::os::unix::fs::symlink("../v2.mcap", mission.join("a.mcap")).unwrap();
+        let g = OutputGuard::new([&mission]);
+        assert!(g.check("--json", &victim2).is_err());
+        assert!(g.check("--json", &victim).is_ok());
+        // A rosbag2 folder whose metadata.yaml names a file outside it.
+        let bag = dir.path().join("rb");
+        std::fs::create_dir(&bag).unwrap();
+        std::fs::write(
+            bag.join("metadata.yaml"),
+            "rosbag2_bagfile_information:\n  storage_identifier: mcap\n  relative_file_paths:\n  - ../victim.mcap\n",
+        )
+        .unwrap();
+        for input in [bag.clone(), bag.join("metadata.yaml")] {
+            let g = OutputGuard::new([&input]);
+            assert!(g.check("--json", &victim).is_err());
+            assert!(g.check("--json", &victim2).is_ok());
+        }
+        // A mission folder holding that rosbag2 folder, and a loop of folders.
+        std::os::unix::fs::symlink("../rb", mission.join("rb")).unwrap();
+        std::fs::create_dir(mission.join("loop")).unwrap();
+        std::fs::write(
+            mission.join("loop/metadata.yaml"),
+            "rosbag2_bagfile_information:\n  storage_identifier: mcap\n  relative_file_paths:\n  - ..\n",
+        )
+        .unwrap();
+        let g = OutputGuard::new([&mission]);
+        assert!(g.check("--json", &victim).is_err());
+    }
+
+    #[test]
+    fn a_folder_output_that_is_a_file_is_refused_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("ref.tum");
+        std::fs::write(&file, "").unwrap();
+        let mut g = OutputGuard::default();
+        let e = g.claim_dir("--out", &file).unwrap_err();
+        assert!(matches!(e, Error::InvalidArgument(_)));
+        assert!(
+            e.to_string().contains("is a file, expected a folder"),
+            "{e}"
+        );
+        #[cfg(unix)]
+        {
+            let e = g.claim_dir("--plot", Path::new("/dev/null")).unwrap_err();
+            assert!(e.to_string().contains("expected a folder"), "{e}");
+        }
+        g.claim_dir("--out", dir.path()).unwrap();
+        g.claim_dir("--plot", &dir.path().join("new")).unwrap();
     }
 
     #[test]
