@@ -25,11 +25,50 @@ pub fn main_with_args(args: Vec<std::ffi::OsString>) -> u8 {
     use clap::Parser;
     match args::Cli::try_parse_from(evo_config::expand(args)) {
         Ok(cli) => run(cli),
+        Err(e) if e.use_stderr() => {
+            eprintln!("{}", usage_error_line(&e.render().to_string()));
+            e.exit_code().clamp(0, 255) as u8
+        }
         Err(e) => {
             let _ = e.print();
             e.exit_code().clamp(0, 255) as u8
         }
     }
+}
+
+/// clap's usage error (`error: …`, its tips and the arguments it lists, a blank line, the usage,
+/// "For more information…") as the one line every error of the project is: the message, what clap
+/// listed or suggested after it, and the command whose `--help` says more.
+fn usage_error_line(rendered: &str) -> String {
+    let mut parts: Vec<&str> = Vec::new();
+    let mut command = "trajdrift".to_string();
+    for line in rendered.lines().map(str::trim).filter(|l| !l.is_empty()) {
+        if let Some(usage) = line.strip_prefix("Usage: ") {
+            let words: Vec<&str> = usage
+                .split_whitespace()
+                .take_while(|w| !w.starts_with(['[', '<', '-']))
+                .collect();
+            if !words.is_empty() {
+                command = words.join(" ");
+            }
+        } else if !line.starts_with("For more information") {
+            parts.push(line);
+        }
+    }
+    let mut text = parts
+        .first()
+        .copied()
+        .unwrap_or("error: invalid usage")
+        .to_string();
+    for (i, p) in parts.iter().enumerate().skip(1) {
+        text.push_str(if i == 1 && text.ends_with(':') {
+            " "
+        } else {
+            "; "
+        });
+        text.push_str(p);
+    }
+    format!("{text}; see `{command} --help`")
 }
 
 /// Dispatches a parsed command line and maps the outcome to an exit code.

@@ -255,8 +255,14 @@ fn parameters_report(
 
 fn require_samples(path: &str, t: &Loaded) -> Result<()> {
     if t.trajectory.len() < 3 {
+        // A text trajectory's label is its file, named once; a topic is named with its recording.
+        let what = if std::path::Path::new(&t.label).is_file() {
+            t.label.clone()
+        } else {
+            format!("{path}: {}", t.label)
+        };
         return Err(Error::TooFewSamples {
-            what: format!("{path}: {}", t.label),
+            what,
             n: t.trajectory.len(),
             need: 3,
         });

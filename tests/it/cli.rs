@@ -92,6 +92,30 @@ fn eval_prints_a_table_and_writes_json() {
     assert_eq!(report["parameters"]["path_eps_m"], 0.3);
 }
 
+// A usage error is one line, as every error: clap's message, what it lists or suggests, and the
+// command whose --help says more.
+#[test]
+fn usage_errors_are_one_line() {
+    for args in [
+        &["eval", "--estimate-file", "e.tum"][..],
+        &["eval", "--bogus"],
+        &["completions", "nope"],
+        &["eval", "--origin", "1,2"],
+        &["nope"],
+    ] {
+        let o = run(args);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        assert_eq!(e.trim_end().lines().count(), 1, "{args:?}: {e}");
+        assert!(
+            e.starts_with("error: ") && e.contains(" --help`"),
+            "{args:?}: {e}"
+        );
+    }
+    let e = stderr(&run(&["eval", "--bogus"]));
+    assert!(e.contains("see `trajdrift eval --help`"), "{e}");
+}
+
 #[test]
 fn negative_numbers_are_values() {
     let dir = tempfile::tempdir().unwrap();

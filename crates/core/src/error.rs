@@ -20,8 +20,8 @@ pub enum Error {
         cause: std::io::Error,
     },
 
-    /// The file is not an MCAP recording (bad magic, or no record could be parsed).
-    #[error("{path}: not an MCAP recording ({detail}); pass a .mcap file, or a TUM file with --reference-file/--estimate-file")]
+    /// The file is not an MCAP recording (bad magic, or no record could be parsed), nor a ROS 1 bag.
+    #[error("{path}: not an MCAP recording nor a ROS 1 bag ({detail}); pass a .mcap or .bag file or a rosbag2 folder (a text trajectory goes with eval's --reference-file/--estimate-file)")]
     NotMcap { path: PathBuf, detail: String },
 
     /// The MCAP file is damaged beyond what truncation recovery covers.
@@ -73,7 +73,7 @@ pub enum Error {
     },
 
     /// A trajectory has too few usable samples for the requested computation.
-    #[error("{what}: only {n} usable samples (need at least {need}); check the topic, the crop (--t-start/--t-end) and the stamps")]
+    #[error("{what}: only {n} usable samples (need at least {need}); check the topic or file, the crop (--t-start/--t-end) and the stamps")]
     TooFewSamples { what: String, n: usize, need: usize },
 
     /// The estimate and the reference do not overlap in time.

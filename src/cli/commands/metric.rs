@@ -70,6 +70,17 @@ pub fn validate(a: &MetricArgs) -> trajdrift::Result<()> {
             in_range(flag, v, Inclusive(-1.0e15), Inclusive(1.0e15), "s")?;
         }
     }
+    // evo takes 0 as unset (see `t_start_s` below); two set bounds must leave a span.
+    if let (Some(start), Some(end)) = (
+        a.t_start.filter(|&t| t != 0.0),
+        a.t_end.filter(|&t| t != 0.0),
+    ) {
+        if start >= end {
+            return Err(trajdrift::Error::InvalidArgument(format!(
+                "--t_start {start} --t_end {end}: the crop is empty; give a --t_start before --t_end"
+            )));
+        }
+    }
     if a.n_to_align == Some(0) {
         return Err(trajdrift::Error::InvalidArgument(
             "--n_to_align 0: align on at least 1 pair (leave it out to align on all)".into(),

@@ -15,6 +15,18 @@ const MAX_SPATIAL_RANGE_S: f64 = 300.0;
 /// the recording was cut short.
 pub fn run(a: OffsetArgs) -> Result<u8> {
     super::metric::validate(&a.common)?;
+    // The command finds Δt every way it can; an offset given beside it would be silently unused.
+    for (flag, given) in [
+        ("--time-offset", a.common.time_offset.is_some()),
+        ("--t_offset", a.common.t_offset.is_some()),
+    ] {
+        if given {
+            return Err(trajdrift::Error::InvalidArgument(format!(
+                "{flag}: `offset` finds the clock offset by every method and takes none; drop {flag} (ape, rpe and eval take one)"
+            ))
+            .into());
+        }
+    }
     trajdrift::params::Range {
         min: trajdrift::params::Bound::Exclusive(0.0),
         max: trajdrift::params::Bound::Inclusive(MAX_SPATIAL_RANGE_S),
