@@ -12,10 +12,16 @@
 //! as their JSON text (the façade parses it), so `Report.to_dict()` is the command line's JSON by
 //! construction. Errors become the package's exceptions (`trajdrift._errors`) with the command line's
 //! one-line message.
+//!
+//! Threads: the library's parallel loops run in a rayon pool this module owns and rebuilds in a process
+//! forked from the one that built it ([`run`]): rayon's global pool would be shared with the parent,
+//! whose worker threads do not exist in a forked child, and a child's first parallel loop would wait
+//! for them forever (`multiprocessing`'s `fork` start method).
 
 use std::collections::HashMap;
 use std::ffi::OsString;
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use numpy::{
@@ -66,6 +72,45 @@ fn exception(class: &str, message: String) -> PyErr {
 
 fn usage(message: String) -> PyErr {
     exception("UsageError", message)
+}
+
+// ---------------------------------------------------------------------------------------------------
+// The thread pool.
+
+/// The pool of this process, with the id of the process that built it.
+static POOL: Mutex<Option<(u32, Arc<rayon::ThreadPool>)>> = Mutex::new(None);
+
+/// The rayon pool of the current process: built on first use, and built again in a forked child (whose
+/// copy of the parent's pool has no threads; it is leaked, as its threads cannot be joined).
+fn pool() -> PyResult<Arc<rayon::ThreadPool>> {
+    let mut slot = POOL.lock().unwrap_or_else(|e| e.into_inner());
+    let pid = std::process::id();
+    if let Some((owner, pool)) = slot.as_ref() {
+        if *owner == pid {
+            return Ok(Arc::clone(pool));
+        }
+    }
+    let pool = Arc::new(
+        rayon::ThreadPoolBuilder::new()
+            .thread_name(|i| format!("trajdrift-{i}"))
+            .build()
+            .map_err(|e| {
+                exception(
+                    "Error",
+                    format!("could not start trajdrift's worker threads: {e}"),
+                )
+            })?,
+    );
+    if let Some(parents) = slot.replace((pid, Arc::clone(&pool))) {
+        std::mem::forget(parents);
+    }
+    Ok(pool)
+}
+
+/// `work` with the interpreter's lock released, its parallel loops in this process's pool.
+fn run<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
+    let pool = pool()?;
+    Ok(py.detach(|| pool.install(work)))
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -383,9 +428,8 @@ fn read<'py>(
         origin,
         text: text_options(text_format, csv, kitti_times)?,
     };
-    let r: TrajectoryRead = py
-        .detach(|| trajdrift::read(&sources, topic.as_deref(), &options))
-        .map_err(py_error)?;
+    let r: TrajectoryRead =
+        run(py, || trajdrift::read(&sources, topic.as_deref(), &options))?.map_err(py_error)?;
     let d = PyDict::new(py);
     d.set_item("name", &r.name)?;
     d.set_item("source", &r.source)?;
@@ -473,12 +517,11 @@ fn evaluate(
             .collect::<trajdrift::Result<_>>()
             .map_err(py_error)?,
     };
-    let (report, notes) = py
-        .detach(|| {
-            let (config, notes) = request.config()?;
-            trajdrift::evaluate(&config).map(|report| (report, notes))
-        })
-        .map_err(py_error)?;
+    let (report, notes) = run(py, || {
+        let (config, notes) = request.config()?;
+        trajdrift::evaluate(&config).map(|report| (report, notes))
+    })?
+    .map_err(py_error)?;
     Ok((to_json(&report)?, notes))
 }
 
@@ -520,9 +563,10 @@ fn evaluate_arrays(
     let p = parameters(parameters_)?;
     let reference = named(&reference)?;
     let estimates = estimates.iter().map(named).collect::<PyResult<Vec<_>>>()?;
-    let report = py
-        .detach(|| trajdrift::evaluate_trajectories(reference, estimates, &p))
-        .map_err(py_error)?;
+    let report = run(py, || {
+        trajdrift::evaluate_trajectories(reference, estimates, &p)
+    })?
+    .map_err(py_error)?;
     to_json(&report)
 }
 
@@ -544,9 +588,7 @@ fn time_offset(
     let p = parameters(parameters_)?;
     let r = trajectory(&reference.0, &reference.1, &reference.2)?;
     let e = trajectory(&estimate.0, &estimate.1, &estimate.2)?;
-    let o = py
-        .detach(|| trajdrift::time_offset(&r, &e, &p))
-        .map_err(py_error)?;
+    let o = run(py, || trajdrift::time_offset(&r, &e, &p))?.map_err(py_error)?;
     to_json(&o)
 }
 
@@ -562,9 +604,7 @@ fn drift_error(
     let p = parameters(parameters_)?;
     let r = trajectory(&reference.0, &reference.1, &reference.2)?;
     let e = trajectory(&estimate.0, &estimate.1, &estimate.2)?;
-    let d = py
-        .detach(|| trajdrift::drift_error(&r, &e, &p))
-        .map_err(py_error)?;
+    let d = run(py, || trajdrift::drift_error(&r, &e, &p))?.map_err(py_error)?;
     to_json(&d)
 }
 
@@ -712,7 +752,7 @@ fn ape<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let o = options.options()?;
     let (r, e) = (reference.poses()?, estimate.poses()?);
-    let result = py.detach(|| trajdrift::ape(r, e, &o)).map_err(py_error)?;
+    let result = run(py, || trajdrift::ape(r, e, &o))?.map_err(py_error)?;
     standard_result(py, result)
 }
 
@@ -747,17 +787,15 @@ fn rpe<'py>(
         from_reference: pairs_from_reference,
     };
     let (r, e) = (reference.poses()?, estimate.poses()?);
-    let result = py
-        .detach(|| trajdrift::rpe(r, e, &o, &pairs))
-        .map_err(py_error)?;
+    let result = run(py, || trajdrift::rpe(r, e, &o, &pairs))?.map_err(py_error)?;
     standard_result(py, result)
 }
 
 /// The `trajdrift` command line, in process: `argv` with the program name first; returns the exit code.
 /// The interpreter's lock is released while it runs; it writes to the process's stdout and stderr.
 #[pyfunction]
-fn main(py: Python<'_>, argv: Vec<OsString>) -> u8 {
-    py.detach(|| trajdrift::main_with_args(argv))
+fn main(py: Python<'_>, argv: Vec<OsString>) -> PyResult<u8> {
+    run(py, || trajdrift::main_with_args(argv))
 }
 
 /// The extension module.
