@@ -28,7 +28,7 @@ use numpy::{
     IntoPyArray, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
     PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 
@@ -120,7 +120,7 @@ fn run<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> 
 fn positions(xyz: &PyReadonlyArray2<'_, f64>, n: usize) -> PyResult<Vec<Vector3<f64>>> {
     let a = xyz.as_array();
     if a.shape() != [n, 3] {
-        return Err(PyValueError::new_err(format!(
+        return Err(usage(format!(
             "xyz must be N×3 with N = {n} stamps, got shape {:?}",
             a.shape()
         )));
@@ -140,7 +140,7 @@ fn quaternions(
 ) -> PyResult<Vec<UnitQuaternion<f64>>> {
     let a = quat.as_array();
     if a.shape() != [n, 4] {
-        return Err(PyValueError::new_err(format!(
+        return Err(usage(format!(
             "quat must be N×4 (x, y, z, w) with N = {n} stamps, got shape {:?}",
             a.shape()
         )));
@@ -203,7 +203,7 @@ fn stamp_seconds(word: Option<&str>) -> PyResult<Option<StampSeconds>> {
         Some("nanos_over_1e9") => Some(StampSeconds::NanosOverE9),
         Some("sec_plus_nanos") => Some(StampSeconds::SecPlusNanos),
         Some(w) => {
-            return Err(PyValueError::new_err(format!(
+            return Err(usage(format!(
                 "stamp_seconds `{w}`: expected decimal, nanos_over_1e9, sec_plus_nanos or None"
             )))
         }
@@ -247,15 +247,15 @@ impl PosesIn<'_> {
             (None, None) => None,
         };
         if stamps_s.as_ref().is_some_and(|s: &Vec<f64>| s.len() != n) {
-            return Err(PyValueError::new_err(
-                "the stamps and the positions differ in length",
+            return Err(usage(
+                "the stamps and the positions differ in length".into(),
             ));
         }
         let rotations = match (&self.rot, &self.quat) {
             (Some(r), _) => {
                 let a = r.as_array();
                 if a.shape() != [n, 3, 3] {
-                    return Err(PyValueError::new_err(format!(
+                    return Err(usage(format!(
                         "rot must be N×3×3 with N = {n}, got shape {:?}",
                         a.shape()
                     )));
@@ -325,7 +325,7 @@ fn parameters(given: Option<&Bound<'_, PyDict>>) -> PyResult<Parameters> {
         for (k, v) in d.iter() {
             let key: String = k.extract()?;
             let Some(spec) = SPECS.iter().find(|s| s.key == key) else {
-                return Err(PyTypeError::new_err(format!(
+                return Err(usage(format!(
                     "unexpected parameter `{key}`; the parameters are {}",
                     SPECS.iter().map(|s| s.key).collect::<Vec<_>>().join(", ")
                 )));
@@ -423,6 +423,14 @@ fn read<'py>(
         "log" => StampSource::Log,
         w => return Err(usage(format!("stamp `{w}`: expected header or log"))),
     };
+    if origin.is_some() {
+        // `evaluate(origin=…)`'s check: each number in its range, named as the keyword.
+        let p = Parameters {
+            origin,
+            ..Parameters::default()
+        };
+        p.validate_as(&|key| key.to_string()).map_err(py_error)?;
+    }
     let options = ReadOptions {
         stamp,
         origin,
@@ -453,6 +461,13 @@ fn read<'py>(
             None => py.None().into_bound(py),
         },
     )?;
+    // What the user must see (a recording cut short): the façade warns with them.
+    let warnings: Vec<(&str, &str)> = r
+        .warnings
+        .iter()
+        .map(|w| (w.code.as_str(), w.message.as_str()))
+        .collect();
+    d.set_item("warnings", warnings)?;
     let (t, xyz, quat) = trajectory_arrays(py, r.trajectory)?;
     d.set_item("t", t)?;
     d.set_item("xyz", xyz)?;
@@ -465,7 +480,7 @@ fn named_input(name: Option<String>, kind: &str, value: String) -> PyResult<Name
     let mut input = match kind {
         "topic" => NamedInput::topic(&value),
         "file" => NamedInput::file(&value),
-        k => return Err(PyValueError::new_err(format!("input kind `{k}`"))),
+        k => return Err(usage(format!("input kind `{k}`"))),
     };
     if let Some(n) = name {
         input.name = n;

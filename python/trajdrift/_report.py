@@ -158,7 +158,7 @@ class DriftErrors(Mapping[float, DriftError]):
     def __getitem__(self, window_m: float) -> DriftError:
         try:
             return self._items[float(window_m)]
-        except KeyError:
+        except (KeyError, TypeError, ValueError):
             raise KeyError(
                 f"no Drift Error at {window_m} m; windows: {', '.join(f'{w:g}' for w in self._items)}"
             ) from None
