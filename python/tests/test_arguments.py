@@ -180,3 +180,13 @@ def test_drift_errors_membership_of_any_key():
     assert 5 in de and 7 not in de and None not in de and "abc" not in de
     with pytest.raises(KeyError, match="no Drift Error at 7 m"):
         de[7]
+
+
+def test_a_missing_reference_or_estimate_is_named_as_python_writes_it():
+    for call, what in [(lambda: trajdrift.evaluate(FIXTURE), r"evaluate\(\): give the reference"),
+                       (lambda: trajdrift.evaluate(FIXTURE, REF), r"evaluate\(\): give at least one estimate"),
+                       (lambda: trajdrift.evaluate(FIXTURE, REF, {}), "estimates="),
+                       (lambda: trajdrift.evaluate(), "give the reference")]:
+        with pytest.raises(trajdrift.UsageError, match=what) as e:
+            call()
+        assert "--" not in str(e.value)

@@ -186,6 +186,14 @@ def evaluate(
     """
     params = _check_keys(parameters, "evaluate")
     named = _named_estimates(estimates)
+    if preset is None and reference is None:
+        raise UsageError(
+            "evaluate(): give the reference (a topic of the recording, a text file or a Trajectory) or a preset"
+        )
+    if preset is None and not named:
+        raise UsageError(
+            "evaluate(): give at least one estimate (estimates=: a topic, a file, a Trajectory, a list or a dict)"
+        )
     in_memory = not _is_input(reference) and reference is not None
     in_memory = in_memory or any(not _is_input(e) for _, e in named)
     if not in_memory:
