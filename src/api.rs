@@ -94,6 +94,9 @@ pub struct TrajectoryRead {
     pub rotation_matrices: Option<Vec<Matrix3<f64>>>,
     /// Rows read, dropped per reason, stamps going back.
     pub rows: RowAudit,
+    /// What the user must see beside the trajectory: a recording cut short (`truncated_recording`,
+    /// the samples up to its last complete record are read).
+    pub warnings: Vec<crate::Warning>,
 }
 
 impl TrajectoryRead {
@@ -179,6 +182,7 @@ pub fn read<P: AsRef<Path>>(
         stamp_seconds: Some(StampSeconds::SecPlusNanos),
         rotation_matrices: None,
         rows: r.rows,
+        warnings: inputs.warnings,
     })
 }
 
@@ -233,6 +237,7 @@ fn read_file(path: &Path, text: &TextOptions) -> Result<TrajectoryRead> {
         stamp_seconds,
         rotation_matrices,
         rows,
+        warnings: Vec::new(),
     })
 }
 

@@ -12,17 +12,23 @@
 //! as their JSON text (the façade parses it), so `Report.to_dict()` is the command line's JSON by
 //! construction. Errors become the package's exceptions (`trajdrift._errors`) with the command line's
 //! one-line message.
+//!
+//! Threads: the library's parallel loops run in a rayon pool this module owns and rebuilds in a process
+//! forked from the one that built it ([`run`]): rayon's global pool would be shared with the parent,
+//! whose worker threads do not exist in a forked child, and a child's first parallel loop would wait
+//! for them forever (`multiprocessing`'s `fork` start method).
 
 use std::collections::HashMap;
 use std::ffi::OsString;
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use numpy::{
     IntoPyArray, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
     PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 
@@ -69,13 +75,52 @@ fn usage(message: String) -> PyErr {
 }
 
 // ---------------------------------------------------------------------------------------------------
+// The thread pool.
+
+/// The pool of this process, with the id of the process that built it.
+static POOL: Mutex<Option<(u32, Arc<rayon::ThreadPool>)>> = Mutex::new(None);
+
+/// The rayon pool of the current process: built on first use, and built again in a forked child (whose
+/// copy of the parent's pool has no threads; it is leaked, as its threads cannot be joined).
+fn pool() -> PyResult<Arc<rayon::ThreadPool>> {
+    let mut slot = POOL.lock().unwrap_or_else(|e| e.into_inner());
+    let pid = std::process::id();
+    if let Some((owner, pool)) = slot.as_ref() {
+        if *owner == pid {
+            return Ok(Arc::clone(pool));
+        }
+    }
+    let pool = Arc::new(
+        rayon::ThreadPoolBuilder::new()
+            .thread_name(|i| format!("trajdrift-{i}"))
+            .build()
+            .map_err(|e| {
+                exception(
+                    "Error",
+                    format!("could not start trajdrift's worker threads: {e}"),
+                )
+            })?,
+    );
+    if let Some(parents) = slot.replace((pid, Arc::clone(&pool))) {
+        std::mem::forget(parents);
+    }
+    Ok(pool)
+}
+
+/// `work` with the interpreter's lock released, its parallel loops in this process's pool.
+fn run<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
+    let pool = pool()?;
+    Ok(py.detach(|| pool.install(work)))
+}
+
+// ---------------------------------------------------------------------------------------------------
 // Arrays in and out.
 
 /// Positions from an N×3 array.
 fn positions(xyz: &PyReadonlyArray2<'_, f64>, n: usize) -> PyResult<Vec<Vector3<f64>>> {
     let a = xyz.as_array();
     if a.shape() != [n, 3] {
-        return Err(PyValueError::new_err(format!(
+        return Err(usage(format!(
             "xyz must be N×3 with N = {n} stamps, got shape {:?}",
             a.shape()
         )));
@@ -95,7 +140,7 @@ fn quaternions(
 ) -> PyResult<Vec<UnitQuaternion<f64>>> {
     let a = quat.as_array();
     if a.shape() != [n, 4] {
-        return Err(PyValueError::new_err(format!(
+        return Err(usage(format!(
             "quat must be N×4 (x, y, z, w) with N = {n} stamps, got shape {:?}",
             a.shape()
         )));
@@ -158,7 +203,7 @@ fn stamp_seconds(word: Option<&str>) -> PyResult<Option<StampSeconds>> {
         Some("nanos_over_1e9") => Some(StampSeconds::NanosOverE9),
         Some("sec_plus_nanos") => Some(StampSeconds::SecPlusNanos),
         Some(w) => {
-            return Err(PyValueError::new_err(format!(
+            return Err(usage(format!(
                 "stamp_seconds `{w}`: expected decimal, nanos_over_1e9, sec_plus_nanos or None"
             )))
         }
@@ -202,15 +247,15 @@ impl PosesIn<'_> {
             (None, None) => None,
         };
         if stamps_s.as_ref().is_some_and(|s: &Vec<f64>| s.len() != n) {
-            return Err(PyValueError::new_err(
-                "the stamps and the positions differ in length",
+            return Err(usage(
+                "the stamps and the positions differ in length".into(),
             ));
         }
         let rotations = match (&self.rot, &self.quat) {
             (Some(r), _) => {
                 let a = r.as_array();
                 if a.shape() != [n, 3, 3] {
-                    return Err(PyValueError::new_err(format!(
+                    return Err(usage(format!(
                         "rot must be N×3×3 with N = {n}, got shape {:?}",
                         a.shape()
                     )));
@@ -280,7 +325,7 @@ fn parameters(given: Option<&Bound<'_, PyDict>>) -> PyResult<Parameters> {
         for (k, v) in d.iter() {
             let key: String = k.extract()?;
             let Some(spec) = SPECS.iter().find(|s| s.key == key) else {
-                return Err(PyTypeError::new_err(format!(
+                return Err(usage(format!(
                     "unexpected parameter `{key}`; the parameters are {}",
                     SPECS.iter().map(|s| s.key).collect::<Vec<_>>().join(", ")
                 )));
@@ -378,14 +423,21 @@ fn read<'py>(
         "log" => StampSource::Log,
         w => return Err(usage(format!("stamp `{w}`: expected header or log"))),
     };
+    if origin.is_some() {
+        // `evaluate(origin=…)`'s check: each number in its range, named as the keyword.
+        let p = Parameters {
+            origin,
+            ..Parameters::default()
+        };
+        p.validate_as(&|key| key.to_string()).map_err(py_error)?;
+    }
     let options = ReadOptions {
         stamp,
         origin,
         text: text_options(text_format, csv, kitti_times)?,
     };
-    let r: TrajectoryRead = py
-        .detach(|| trajdrift::read(&sources, topic.as_deref(), &options))
-        .map_err(py_error)?;
+    let r: TrajectoryRead =
+        run(py, || trajdrift::read(&sources, topic.as_deref(), &options))?.map_err(py_error)?;
     let d = PyDict::new(py);
     d.set_item("name", &r.name)?;
     d.set_item("source", &r.source)?;
@@ -409,6 +461,13 @@ fn read<'py>(
             None => py.None().into_bound(py),
         },
     )?;
+    // What the user must see (a recording cut short): the façade warns with them.
+    let warnings: Vec<(&str, &str)> = r
+        .warnings
+        .iter()
+        .map(|w| (w.code.as_str(), w.message.as_str()))
+        .collect();
+    d.set_item("warnings", warnings)?;
     let (t, xyz, quat) = trajectory_arrays(py, r.trajectory)?;
     d.set_item("t", t)?;
     d.set_item("xyz", xyz)?;
@@ -421,7 +480,7 @@ fn named_input(name: Option<String>, kind: &str, value: String) -> PyResult<Name
     let mut input = match kind {
         "topic" => NamedInput::topic(&value),
         "file" => NamedInput::file(&value),
-        k => return Err(PyValueError::new_err(format!("input kind `{k}`"))),
+        k => return Err(usage(format!("input kind `{k}`"))),
     };
     if let Some(n) = name {
         input.name = n;
@@ -473,12 +532,11 @@ fn evaluate(
             .collect::<trajdrift::Result<_>>()
             .map_err(py_error)?,
     };
-    let (report, notes) = py
-        .detach(|| {
-            let (config, notes) = request.config()?;
-            trajdrift::evaluate(&config).map(|report| (report, notes))
-        })
-        .map_err(py_error)?;
+    let (report, notes) = run(py, || {
+        let (config, notes) = request.config()?;
+        trajdrift::evaluate(&config).map(|report| (report, notes))
+    })?
+    .map_err(py_error)?;
     Ok((to_json(&report)?, notes))
 }
 
@@ -520,9 +578,10 @@ fn evaluate_arrays(
     let p = parameters(parameters_)?;
     let reference = named(&reference)?;
     let estimates = estimates.iter().map(named).collect::<PyResult<Vec<_>>>()?;
-    let report = py
-        .detach(|| trajdrift::evaluate_trajectories(reference, estimates, &p))
-        .map_err(py_error)?;
+    let report = run(py, || {
+        trajdrift::evaluate_trajectories(reference, estimates, &p)
+    })?
+    .map_err(py_error)?;
     to_json(&report)
 }
 
@@ -544,9 +603,7 @@ fn time_offset(
     let p = parameters(parameters_)?;
     let r = trajectory(&reference.0, &reference.1, &reference.2)?;
     let e = trajectory(&estimate.0, &estimate.1, &estimate.2)?;
-    let o = py
-        .detach(|| trajdrift::time_offset(&r, &e, &p))
-        .map_err(py_error)?;
+    let o = run(py, || trajdrift::time_offset(&r, &e, &p))?.map_err(py_error)?;
     to_json(&o)
 }
 
@@ -562,9 +619,7 @@ fn drift_error(
     let p = parameters(parameters_)?;
     let r = trajectory(&reference.0, &reference.1, &reference.2)?;
     let e = trajectory(&estimate.0, &estimate.1, &estimate.2)?;
-    let d = py
-        .detach(|| trajdrift::drift_error(&r, &e, &p))
-        .map_err(py_error)?;
+    let d = run(py, || trajdrift::drift_error(&r, &e, &p))?.map_err(py_error)?;
     to_json(&d)
 }
 
@@ -712,7 +767,7 @@ fn ape<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let o = options.options()?;
     let (r, e) = (reference.poses()?, estimate.poses()?);
-    let result = py.detach(|| trajdrift::ape(r, e, &o)).map_err(py_error)?;
+    let result = run(py, || trajdrift::ape(r, e, &o))?.map_err(py_error)?;
     standard_result(py, result)
 }
 
@@ -747,17 +802,15 @@ fn rpe<'py>(
         from_reference: pairs_from_reference,
     };
     let (r, e) = (reference.poses()?, estimate.poses()?);
-    let result = py
-        .detach(|| trajdrift::rpe(r, e, &o, &pairs))
-        .map_err(py_error)?;
+    let result = run(py, || trajdrift::rpe(r, e, &o, &pairs))?.map_err(py_error)?;
     standard_result(py, result)
 }
 
 /// The `trajdrift` command line, in process: `argv` with the program name first; returns the exit code.
 /// The interpreter's lock is released while it runs; it writes to the process's stdout and stderr.
 #[pyfunction]
-fn main(py: Python<'_>, argv: Vec<OsString>) -> u8 {
-    py.detach(|| trajdrift::main_with_args(argv))
+fn main(py: Python<'_>, argv: Vec<OsString>) -> PyResult<u8> {
+    run(py, || trajdrift::main_with_args(argv))
 }
 
 /// The extension module.

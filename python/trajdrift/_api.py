@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import difflib
 import json
+import math
+import operator
 import os
 import warnings
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union, overload
 
 from . import _trajdrift
+from ._errors import UsageError
 from ._report import DriftError, MetricResult, Report, TimeOffset
 from ._trajectory import Trajectory, arrays, as_trajectory, poses
 
@@ -30,7 +33,7 @@ def _check_keys(parameters: Mapping[str, Any], function: str) -> Dict[str, Any]:
         if k not in PARAMETERS:
             close = difflib.get_close_matches(k, PARAMETERS, n=1)
             hint = f"; did you mean {close[0]!r}?" if close else ""
-            raise TypeError(
+            raise UsageError(
                 f"{function}() got an unexpected keyword argument {key!r}{hint} "
                 f"(parameters: {', '.join(PARAMETERS)})"
             )
@@ -70,27 +73,67 @@ def read(
     stamp and a repeated stamp dropped (``Trajectory.rows`` counts them); a TUM file's rows are kept as
     written, as evo reads them (the evaluation sorts them itself). A recording is streamed once; the
     arrays are the library's, without a copy. Raises :class:`trajdrift.InputError` with the command line's message.
+    A recording cut short (the recorder stopped abruptly) is read up to its last complete record, with a
+    ``UserWarning`` that says so (the ``truncated_recording`` warning of :func:`evaluate`'s report).
     """
-    if isinstance(source, (str, os.PathLike)):
-        sources = [os.fspath(source)]
-    else:
-        sources = [os.fspath(s) for s in source]
+    sources = _paths(source, "read(): source")
+    if not sources:
+        raise UsageError("read(): source is empty; give a recording, the files of a mission or a text trajectory file")
+    if topic is not None and not isinstance(topic, str):
+        raise UsageError(f"read(): topic must be a string such as '/odom' or '/tf:odom:base_link'; got {type(topic).__name__}")
+    for name, v in (("stamp", stamp), ("text_format", text_format), ("csv", csv)):
+        if v is not None and not isinstance(v, str):
+            raise UsageError(f"read(): {name} must be a string; got {type(v).__name__}")
     d = _trajdrift.read(
         sources,
         topic,
         stamp,
-        None if origin is None else [float(x) for x in origin],
+        None if origin is None else _origin(origin),
         text_format,
         csv,
-        None if kitti_times is None else os.fspath(kitti_times),
+        None if kitti_times is None else _path(kitti_times, "read(): kitti_times"),
     )
+    for _code, message in d.pop("warnings"):
+        warnings.warn(message, UserWarning, stacklevel=2)
     return Trajectory._from_native(d)
 
 
-def _lever(v: Any) -> str:
+def _origin(origin: Any) -> List[float]:
+    """``origin`` as three numbers (their ranges are checked by the library, as ``evaluate``'s)."""
+    try:
+        values = [float(x) for x in origin]
+    except (TypeError, ValueError):
+        values = []
+    if len(values) != 3 or isinstance(origin, str):
+        raise UsageError(f"read(): origin takes three numbers (latitude °, longitude °, height m); got {origin!r}")
+    return values
+
+
+def _lever(v: Any, what: str = "estimate_lever") -> str:
     if isinstance(v, str):
         return v
-    return ",".join(repr(float(x)) for x in v)
+    return ",".join(repr(x) for x in _lever_xyz(v, what))
+
+
+#: The range of a lever's components, metres (the library's, for `--reference-lever`/`--estimate-lever`).
+_LEVER_M = 1000.0
+
+
+def _lever_xyz(v: Any, what: str) -> List[float]:
+    """A lever ``(x, y, z)`` in metres, checked as the recording path checks it: three finite numbers
+    within ±1000 m."""
+    try:
+        xs = [float(x) for x in v]
+    except (TypeError, ValueError):
+        xs = []
+    if len(xs) != 3:
+        raise UsageError(f"{what} takes (x, y, z) metres or 'tf-static:[BODY:]FRAME', got {v!r}")
+    for x in xs:
+        if not (math.isfinite(x) and -_LEVER_M <= x <= _LEVER_M):
+            raise UsageError(
+                f"{what} {x}: out of range; expected a finite value in [-{_LEVER_M:g}, {_LEVER_M:g}] m"
+            )
+    return xs
 
 
 def _is_input(obj: Any) -> bool:
@@ -136,13 +179,21 @@ def evaluate(
       metres or ``"tf-static:[BODY:]FRAME"``; ``estimate_lever`` may be a dict by estimate name.
     - ``text_format``, ``csv``, ``kitti_times``: how text files are read (see :func:`read`).
 
-    A bad parameter value raises :class:`trajdrift.UsageError` (a ``ValueError``) with the command
-    line's message; an unknown parameter a ``TypeError``. Warnings are in ``Report.warnings``; a
+    A bad parameter value raises :class:`trajdrift.UsageError` (also a ``ValueError``) with the command
+    line's message; an unknown parameter too (a ``UsageError`` that is also a ``TypeError``). Warnings are in ``Report.warnings``; a
     preset's estimate absent from the recording is skipped with a ``UserWarning`` (the command line's
     ``note:``).
     """
     params = _check_keys(parameters, "evaluate")
     named = _named_estimates(estimates)
+    if preset is None and reference is None:
+        raise UsageError(
+            "evaluate(): give the reference (a topic of the recording, a text file or a Trajectory) or a preset"
+        )
+    if preset is None and not named:
+        raise UsageError(
+            "evaluate(): give at least one estimate (estimates=: a topic, a file, a Trajectory, a list or a dict)"
+        )
     in_memory = not _is_input(reference) and reference is not None
     in_memory = in_memory or any(not _is_input(e) for _, e in named)
     if not in_memory:
@@ -150,7 +201,7 @@ def evaluate(
         kind = "topic" if recordings else "file"
         levers: List[Tuple[Optional[str], str]] = []
         if isinstance(estimate_lever, Mapping):
-            levers = [(str(k), _lever(v)) for k, v in estimate_lever.items()]
+            levers = [(str(k), _lever(v, f"estimate_lever[{k!r}]")) for k, v in estimate_lever.items()]
         elif estimate_lever is not None:
             levers = [(None, _lever(estimate_lever))]
         text, notes = _trajdrift.evaluate(
@@ -161,8 +212,8 @@ def evaluate(
             params,
             text_format,
             csv,
-            None if kitti_times is None else os.fspath(kitti_times),
-            None if reference_lever is None else _lever(reference_lever),
+            None if kitti_times is None else _path(kitti_times, "evaluate(): kitti_times"),
+            None if reference_lever is None else _lever(reference_lever, "reference_lever"),
             levers,
         )
         # What the command line prints as `note:` (a preset's estimate absent from the recording).
@@ -170,9 +221,9 @@ def evaluate(
             warnings.warn(note, stacklevel=2)
         return Report(json.loads(text))
     if preset is not None:
-        raise TypeError("preset picks topics of a recording; it does not apply to trajectories in memory")
+        raise UsageError("preset picks topics of a recording; it does not apply to trajectories in memory")
     if reference is None:
-        raise TypeError("evaluate(): give the reference")
+        raise UsageError("evaluate(): give the reference")
 
     def load(obj: Any, what: str) -> Trajectory:
         if _is_input(obj):
@@ -181,37 +232,62 @@ def evaluate(
                         text_format=text_format, csv=csv, kitti_times=kitti_times)
         return as_trajectory(obj, what)
 
-    def lever_of(name: str) -> Optional[List[float]]:
-        v = estimate_lever.get(name) if isinstance(estimate_lever, Mapping) else estimate_lever
+    def lever_in_memory(v: Any, what: str) -> Optional[List[float]]:
         if v is None:
             return None
         if isinstance(v, str):
-            raise TypeError("a tf-static: lever needs the recording; give (x, y, z) for trajectories in memory")
-        return [float(x) for x in v]
+            raise UsageError(f"{what}: a tf-static: lever needs the recording; give (x, y, z) for trajectories in memory")
+        return _lever_xyz(v, what)
+
+    def lever_of(name: str) -> Optional[List[float]]:
+        if isinstance(estimate_lever, Mapping):
+            return lever_in_memory(estimate_lever.get(name), f"estimate_lever[{name!r}]")
+        return lever_in_memory(estimate_lever, "estimate_lever")
 
     ref = load(reference, "reference")
+    ref_t, ref_xyz, ref_quat = arrays(ref, "reference")
     ests = []
     for i, (name, e) in enumerate(named):
-        tr = load(e, f"estimates[{i}]")
+        what = f"estimates[{name!r}]" if name is not None else f"estimates[{i}]"
+        tr = load(e, what)
         label = name or tr.name or f"estimate{i + 1}"
-        ests.append((label, tr.source, tr.type_name, tr.t, tr.xyz, tr.quat, lever_of(label)))
-    if isinstance(reference_lever, str):
-        raise TypeError("a tf-static: lever needs the recording; give (x, y, z) for trajectories in memory")
-    ref_lever = None if reference_lever is None else [float(x) for x in reference_lever]
+        t, xyz, quat = arrays(tr, what)
+        ests.append((label, tr.source, tr.type_name, t, xyz, quat, lever_of(label)))
+    if isinstance(estimate_lever, Mapping):
+        labels = [e[0] for e in ests]
+        for k in estimate_lever:
+            if str(k) not in labels:
+                raise UsageError(
+                    f"estimate_lever names {str(k)!r}, which is no estimate; estimates: {', '.join(labels)}"
+                )
+    ref_lever = lever_in_memory(reference_lever, "reference_lever")
     text = _trajdrift.evaluate_arrays(
-        (ref.name or "reference", ref.source, ref.type_name, ref.t, ref.xyz, ref.quat, ref_lever),
+        (ref.name or "reference", ref.source, ref.type_name, ref_t, ref_xyz, ref_quat, ref_lever),
         ests,
         params,
     )
     return Report(json.loads(text))
 
 
-def _paths(recording: Any) -> List[str]:
+def _path(p: Any, what: str) -> str:
+    if isinstance(p, bytes):
+        return os.fsdecode(p)
+    if not _is_input(p):
+        raise UsageError(f"{what} must be a path (str or os.PathLike); got {type(p).__name__}")
+    return os.fsdecode(os.fspath(p))
+
+
+def _paths(recording: Any, what: str = "evaluate(): recording") -> List[str]:
+    """A path or a list of paths (the files of one mission), as strings."""
     if recording is None:
         return []
-    if _is_input(recording):
-        return [os.fspath(recording)]
-    return [os.fspath(r) for r in recording]
+    if _is_input(recording) or isinstance(recording, bytes):
+        return [_path(recording, what)]
+    if not isinstance(recording, Sequence):
+        raise UsageError(
+            f"{what} must be a path (str or os.PathLike) or a list of paths; got {type(recording).__name__}"
+        )
+    return [_path(r, f"{what}[{i}]") for i, r in enumerate(recording)]
 
 
 def time_offset(
@@ -229,6 +305,12 @@ def time_offset(
     :func:`evaluate`. Returns ``offset_s``, ``sigma_s``, ``model``, ``status`` and every method's
     answer."""
     params = _check_keys(parameters, "time_offset")
+    for key, keyword in (("offset_method", "method"), ("offset_model", "model")):
+        if key in params:
+            raise UsageError(
+                f"time_offset() takes the {keyword} as {keyword}=, not {key}= (e.g. "
+                f"time_offset(ref, est, {keyword}={params[key]!r}))"
+            )
     params.update(offset_method=method, offset_model=model)
     text = _trajdrift.time_offset(arrays(reference, "reference"), arrays(estimate, "estimate"), params)
     return TimeOffset(json.loads(text))
@@ -245,6 +327,11 @@ def drift_error(reference: Any, estimate: Any, window_m: Any = 5, **parameters: 
     Other parameters (``lever_correction``, ``overlap``, ``curvature_eps``, …) as in
     :func:`evaluate`."""
     params = _check_keys(parameters, "drift_error")
+    if "window" in params:
+        raise UsageError(
+            f"drift_error() takes the window sizes as window_m=, not window= (e.g. "
+            f"drift_error(ref, est, window_m={params['window']!r}))"
+        )
     params["window"] = window_m
     text = _trajdrift.drift_error(arrays(reference, "reference"), arrays(estimate, "estimate"), params)
     results = [DriftError(d) for d in json.loads(text)]
@@ -298,16 +385,33 @@ def _options(
         "pose_relation": _word(pose_relation, _RELATIONS),
         "align": bool(align),
         "correct_scale": bool(correct_scale),
-        "n_to_align": None if n_to_align is None else int(n_to_align),
+        "n_to_align": None if n_to_align is None else _n_to_align(n_to_align),
         "align_origin": bool(align_origin),
         "align_yaw": bool(align_yaw),
-        "t_max_diff": float(t_max_diff),
-        "t_offset": float(t_offset),
+        "t_max_diff": _number(t_max_diff, "t_max_diff"),
+        "t_offset": _number(t_offset, "t_offset"),
         "sync_method": str(sync_method),
-        "t_start": None if t_start is None else float(t_start),
-        "t_end": None if t_end is None else float(t_end),
+        "t_start": None if t_start is None else _number(t_start, "t_start"),
+        "t_end": None if t_end is None else _number(t_end, "t_end"),
         "project_to_plane": None if plane is None else str(plane),
     }
+
+
+def _number(v: Any, name: str) -> float:
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        raise UsageError(f"{name} {v!r}: expected a number") from None
+
+
+def _n_to_align(n: Any) -> int:
+    """evo's ``n_to_align``: a whole number of poses (-1 or any negative: all)."""
+    try:
+        n = operator.index(n)
+    except TypeError:
+        raise UsageError(f"n_to_align {n!r}: expected a whole number of poses (-1: all)") from None
+    # Beyond every trajectory's length means all of them, as a large count does.
+    return max(min(n, 2**63 - 1), -1)
 
 
 def _result(d: Dict[str, Any]) -> MetricResult:
@@ -398,9 +502,9 @@ def rpe(
         poses(estimate, "estimate"),
         _options(pose_relation, align, correct_scale, n_to_align, align_origin, align_yaw,
                  t_max_diff, t_offset, sync_method, t_start, t_end, project_to_plane),
-        float(delta),
+        _number(delta, "delta"),
         _word(delta_unit, _UNITS),
-        float(rel_delta_tol),
+        _number(rel_delta_tol, "rel_delta_tol"),
         bool(all_pairs),
         bool(pairs_from_reference),
     )

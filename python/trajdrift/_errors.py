@@ -14,9 +14,10 @@ class Error(Exception):
     exit_code: int = 1
 
 
-class UsageError(Error, ValueError):
+class UsageError(Error, ValueError, TypeError):
     """A bad parameter value or argument (the command line's exit code 2), e.g. ``grid=1e-9``: the
-    message names the parameter as its flag (``--grid``), the value and the range."""
+    message names the parameter as its flag (``--grid``), the value and the range. Also a
+    ``ValueError`` and a ``TypeError`` (an unknown keyword, an argument of the wrong type)."""
 
     exit_code = 2
 
@@ -29,3 +30,9 @@ class InputError(Error):
 class MetricError(Error):
     """The data do not allow the computation: too few samples, no overlap in time, no pose pair within
     ``t_max_diff``, a degenerate alignment, orientations a pose relation needs and the data lack."""
+
+
+# Tracebacks and reprs name them as the package exports them: ``trajdrift.UsageError``.
+for _cls in (Error, UsageError, InputError, MetricError):
+    _cls.__module__ = "trajdrift"
+del _cls

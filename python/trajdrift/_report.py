@@ -33,6 +33,10 @@ class _View:
         self._d = d
 
     def __getattr__(self, name: str) -> Any:
+        # Only the JSON's fields: `_d` itself (not yet set while copy or pickle rebuilds the view) and
+        # the special names those protocols look up are not fields.
+        if name.startswith("_"):
+            raise AttributeError(name)
         try:
             return self._d[name]
         except KeyError:
@@ -46,6 +50,10 @@ class _View:
     def to_dict(self) -> Dict[str, Any]:
         """This object as the JSON report writes it (a deep copy)."""
         return copy.deepcopy(self._d)
+
+    def __reduce__(self) -> Any:
+        # Copied and pickled (returned from a process pool) as the JSON object it wraps.
+        return (type(self), (self._d,))
 
     def __eq__(self, other: object) -> bool:
         return type(other) is type(self) and other._d == self._d  # type: ignore[attr-defined]
@@ -150,7 +158,7 @@ class DriftErrors(Mapping[float, DriftError]):
     def __getitem__(self, window_m: float) -> DriftError:
         try:
             return self._items[float(window_m)]
-        except KeyError:
+        except (KeyError, TypeError, ValueError):
             raise KeyError(
                 f"no Drift Error at {window_m} m; windows: {', '.join(f'{w:g}' for w in self._items)}"
             ) from None
@@ -229,6 +237,9 @@ class MetricResult(_View):
     def __init__(self, d: Dict[str, Any], arrays: Dict[str, Any]) -> None:
         super().__init__(d)
         self._arrays = arrays
+
+    def __reduce__(self) -> Any:
+        return (type(self), (self._d, self._arrays))
 
     @property
     def stats(self) -> Dict[str, float]:

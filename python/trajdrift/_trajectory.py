@@ -9,6 +9,8 @@ from typing import Any, Optional
 
 import numpy as np
 
+from ._errors import UsageError
+
 __all__ = ["Trajectory", "STAMP_SECONDS"]
 
 #: How a trajectory's nanosecond stamps become the float seconds evo compares, by the source's reader
@@ -20,6 +22,9 @@ STAMP_SECONDS = ("decimal", "nanos_over_1e9", "sec_plus_nanos", None)
 
 _NS = 1_000_000_000
 
+#: The largest |seconds| a float stamp may hold: int64 nanoseconds end in April 2262.
+_MAX_SECONDS = 9.2e9
+
 
 def _seconds_to_ns(s: np.ndarray) -> np.ndarray:
     """Float seconds to integer nanoseconds: for each stamp the shortest decimal (at most 9 digits after
@@ -28,7 +33,13 @@ def _seconds_to_ns(s: np.ndarray) -> np.ndarray:
     gives the stamps back exactly at Unix-epoch magnitudes (and within 0.5 ns below them)."""
     s = np.asarray(s, dtype=np.float64)
     if not np.all(np.isfinite(s)):
-        raise ValueError("t: the stamps must be finite")
+        raise UsageError("t: the stamps must be finite")
+    if s.size and np.max(np.abs(s)) > _MAX_SECONDS:
+        big = s[np.argmax(np.abs(s))]
+        raise UsageError(
+            f"t: float stamps are seconds, and {big:.6g} s is beyond int64 nanoseconds (±{_MAX_SECONDS:.3g} s, "
+            f"year 2262); give nanoseconds as int64"
+        )
     whole = np.floor(s)
     frac = s - whole  # exact (Sterbenz)
     nsec = np.rint(frac * 1e9).astype(np.int64)
@@ -40,6 +51,34 @@ def _seconds_to_ns(s: np.ndarray) -> np.ndarray:
         nsec[ok] = cand[ok]
         done |= ok
     return whole.astype(np.int64) * _NS + nsec
+
+
+def _stamps_ns(t: Any, what: str) -> np.ndarray:
+    """Integer nanosecond stamps as a contiguous int64 array; a float array, a value beyond int64 (an
+    uint64 stamp after April 2262) or a non-number is refused rather than rounded or wrapped."""
+    a = np.asarray(t)
+    if a.dtype.kind == "f":
+        raise UsageError(f"{what} must hold int64 nanoseconds; for float seconds use Trajectory.from_arrays")
+    if a.dtype.kind == "u" and a.size and int(a.max()) > np.iinfo(np.int64).max:
+        raise UsageError(
+            f"{what}: stamp {int(a.max())} ns is beyond int64 nanoseconds (year 2262); give int64 nanoseconds"
+        )
+    if a.dtype.kind not in "iub" and a.size:
+        try:
+            a = np.array(a, dtype=np.int64)
+        except (OverflowError, ValueError, TypeError):
+            raise UsageError(
+                f"{what} must hold int64 nanoseconds; got {a.dtype} values that are not such integers"
+            ) from None
+    return np.ascontiguousarray(a, dtype=np.int64)
+
+
+def _floats(v: Any, what: str) -> np.ndarray:
+    """A contiguous float64 array, or a :class:`UsageError` naming ``what``."""
+    try:
+        return np.ascontiguousarray(v, dtype=np.float64)
+    except (ValueError, TypeError) as e:
+        raise UsageError(f"{what} must hold numbers (float64): {e}") from None
 
 
 def _ns_to_seconds(t: np.ndarray, rule: Optional[str]) -> np.ndarray:
@@ -70,7 +109,9 @@ def _evo_quat_xyzw(obj: Any) -> Optional[np.ndarray]:
     q = getattr(obj, "orientations_quat_wxyz", None)
     if q is None:
         return None
-    q = np.asarray(q, dtype=np.float64)
+    q = _floats(q, "orientations_quat_wxyz")
+    if q.ndim != 2 or q.shape[1] != 4:
+        raise UsageError(f"orientations_quat_wxyz must be (N, 4) w, x, y, z; got {q.shape}")
     return np.ascontiguousarray(q[:, [1, 2, 3, 0]])
 
 
@@ -119,24 +160,21 @@ class Trajectory:
         stamp_seconds: Optional[str] = "decimal",
         rows: Optional[dict] = None,
     ) -> None:
-        t = np.ascontiguousarray(t)
-        if t.dtype.kind == "f":
-            raise TypeError("t must hold int64 nanoseconds; for float seconds use Trajectory.from_arrays")
-        t = np.ascontiguousarray(t, dtype=np.int64)
-        xyz = np.ascontiguousarray(xyz, dtype=np.float64)
+        t = _stamps_ns(t, "t")
+        xyz = _floats(xyz, "xyz")
         n = t.shape[0] if t.ndim == 1 else -1
         if t.ndim != 1 or xyz.shape != (n, 3):
-            raise ValueError(f"t must be (N,) and xyz (N, 3); got t {t.shape} and xyz {xyz.shape}")
+            raise UsageError(f"t must be (N,) and xyz (N, 3); got t {t.shape} and xyz {xyz.shape}")
         if quat is not None:
-            quat = np.ascontiguousarray(quat, dtype=np.float64)
+            quat = _floats(quat, "quat")
             if quat.shape != (n, 4):
-                raise ValueError(f"quat must be (N, 4) x, y, z, w with N = {n}; got {quat.shape}")
+                raise UsageError(f"quat must be (N, 4) x, y, z, w with N = {n}; got {quat.shape}")
         if rot is not None:
-            rot = np.ascontiguousarray(rot, dtype=np.float64)
+            rot = _floats(rot, "rot")
             if rot.shape != (n, 3, 3):
-                raise ValueError(f"rot must be (N, 3, 3) with N = {n}; got {rot.shape}")
+                raise UsageError(f"rot must be (N, 3, 3) with N = {n}; got {rot.shape}")
         if stamp_seconds not in STAMP_SECONDS:
-            raise ValueError(f"stamp_seconds {stamp_seconds!r}: expected one of {STAMP_SECONDS}")
+            raise UsageError(f"stamp_seconds {stamp_seconds!r}: expected one of {STAMP_SECONDS}")
         self.t, self.xyz, self.quat, self.rot = t, xyz, quat, rot
         self.name, self.source, self.type_name = name, source, type_name
         self.stamp_seconds = stamp_seconds
@@ -159,11 +197,13 @@ class Trajectory:
         are already int64/float64 and contiguous are kept without a copy."""
         t = np.asarray(t)
         t = _seconds_to_ns(t) if t.dtype.kind == "f" else t
-        if quat is not None:
-            if quat_order == "wxyz":
-                quat = np.asarray(quat, dtype=np.float64)[:, [1, 2, 3, 0]]
-            elif quat_order != "xyzw":
-                raise ValueError(f"quat_order {quat_order!r}: expected 'xyzw' or 'wxyz'")
+        if quat_order not in ("xyzw", "wxyz"):
+            raise UsageError(f"quat_order {quat_order!r}: expected 'xyzw' or 'wxyz'")
+        if quat is not None and quat_order == "wxyz":
+            quat = _floats(quat, "quat")
+            if quat.ndim != 2 or quat.shape[1] != 4:
+                raise UsageError(f"quat must be (N, 4) w, x, y, z (quat_order='wxyz'); got {quat.shape}")
+            quat = quat[:, [1, 2, 3, 0]]
         return cls(t, xyz, quat, name=name)
 
     @classmethod
@@ -172,8 +212,13 @@ class Trajectory:
         ``positions_xyz`` and ``orientations_quat_wxyz``) as a trajectory. A
         ``PosePath3D`` (no stamps) is stamped ``i·0.1 s`` and paired by index, as evo pairs it. Stamps
         become nanoseconds as in :meth:`from_arrays`; :attr:`timestamps` gives evo's back."""
+        if not _is_evo_like(traj):
+            raise UsageError(
+                f"from_evo: expected an evo trajectory (timestamps, positions_xyz, orientations_quat_wxyz), "
+                f"got {type(traj).__name__}"
+            )
         ts = getattr(traj, "timestamps", None)
-        xyz = np.asarray(traj.positions_xyz, dtype=np.float64)
+        xyz = _floats(traj.positions_xyz, "positions_xyz")
         rot = _evo_rotation_matrices(traj)
         quat = _evo_quat_xyzw(traj)
         if ts is None:
@@ -246,16 +291,53 @@ def as_trajectory(obj: Any, what: str) -> Trajectory:
         return obj
     if _is_evo_like(obj):
         return Trajectory.from_evo(obj)
-    raise TypeError(
+    raise UsageError(
         f"{what}: expected a trajdrift.Trajectory or an evo trajectory (timestamps, positions_xyz, "
         f"orientations_quat_wxyz), got {type(obj).__name__}"
     )
 
 
+def _finite_positions(xyz: np.ndarray, what: str) -> None:
+    """Refuses a position that is NaN or infinite, naming the trajectory and the row: the metrics would
+    otherwise leave it out of some numbers and count it in others."""
+    bad = ~np.all(np.isfinite(xyz), axis=1)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise UsageError(
+            f"{what}: position of row {i} is not finite ({', '.join(repr(float(x)) for x in xyz[i])}); "
+            f"{int(bad.sum())} such rows: drop them (e.g. xyz[np.isfinite(xyz).all(axis=1)])"
+        )
+
+
+def _seconds(ts: Any, n: int, what: str) -> np.ndarray:
+    s = _floats(ts, f"{what}.timestamps")
+    if s.shape != (n,):
+        raise UsageError(f"{what}: timestamps must be (N,) with N = {n} positions; got {s.shape}")
+    return s
+
+
+def _checked(tr: Trajectory, what: str) -> tuple:
+    """``(t, xyz, quat, rot)`` of ``tr`` as the native layer takes them: its arrays may have been
+    reassigned since it was made (another dtype, another shape), so they are checked and converted
+    again here, a mismatch a :class:`UsageError` naming ``what``."""
+    t = _stamps_ns(tr.t, f"{what}.t")
+    xyz = _floats(tr.xyz, f"{what}.xyz")
+    n = t.shape[0] if t.ndim == 1 else -1
+    if t.ndim != 1 or xyz.shape != (n, 3):
+        raise UsageError(f"{what}: t must be (N,) and xyz (N, 3); got t {t.shape} and xyz {xyz.shape}")
+    quat = None if tr.quat is None else _floats(tr.quat, f"{what}.quat")
+    if quat is not None and quat.shape != (n, 4):
+        raise UsageError(f"{what}: quat must be (N, 4) x, y, z, w with N = {n}; got {quat.shape}")
+    rot = None if tr.rot is None else _floats(tr.rot, f"{what}.rot")
+    if rot is not None and rot.shape != (n, 3, 3):
+        raise UsageError(f"{what}: rot must be (N, 3, 3) with N = {n}; got {rot.shape}")
+    return t, xyz, quat, rot
+
+
 def arrays(obj: Any, what: str) -> tuple:
     """``(t, xyz, quat)`` for the native evaluation."""
-    tr = as_trajectory(obj, what)
-    return (tr.t, tr.xyz, tr.quat)
+    t, xyz, quat, _ = _checked(as_trajectory(obj, what), what)
+    return (t, xyz, quat)
 
 
 def poses(obj: Any, what: str) -> dict:
@@ -263,26 +345,32 @@ def poses(obj: Any, what: str) -> dict:
     matrices as they are (so that the numbers are evo's), a :class:`Trajectory`'s stamps by its
     source's rule."""
     if isinstance(obj, Trajectory):
+        t, xyz, quat, rot = _checked(obj, what)
+        _finite_positions(xyz, what)
         return {
-            "t": obj.t,
+            "t": t,
             "stamp_seconds": obj.stamp_seconds,
             "seconds": None,
-            "xyz": obj.xyz,
-            "quat": obj.quat,
-            "rot": obj.rot,
+            "xyz": xyz,
+            "quat": quat,
+            "rot": rot,
         }
     if _is_evo_like(obj):
         ts = getattr(obj, "timestamps", None)
         rot = _evo_rotation_matrices(obj)
+        xyz = _floats(obj.positions_xyz, f"{what}.positions_xyz")
+        if xyz.ndim != 2 or xyz.shape[1] != 3:
+            raise UsageError(f"{what}: positions_xyz must be (N, 3); got {xyz.shape}")
+        _finite_positions(xyz, what)
         return {
             "t": None,
             "stamp_seconds": None,
-            "seconds": None if ts is None else np.ascontiguousarray(ts, dtype=np.float64),
-            "xyz": np.ascontiguousarray(obj.positions_xyz, dtype=np.float64),
+            "seconds": None if ts is None else _seconds(ts, xyz.shape[0], what),
+            "xyz": xyz,
             "quat": None if rot is not None else _evo_quat_xyzw(obj),
             "rot": rot,
         }
-    raise TypeError(
+    raise UsageError(
         f"{what}: expected a trajdrift.Trajectory or an evo trajectory (timestamps, positions_xyz, "
         f"orientations_quat_wxyz), got {type(obj).__name__}"
     )
