@@ -14,7 +14,7 @@
 //! one-line message.
 //!
 //! Threads: the library's parallel loops run in a rayon pool this module owns and rebuilds in a process
-//! forked from the one that built it ([`run`]): rayon's global pool would be shared with the parent,
+//! forked from the one that built it (`run`): rayon's global pool would be shared with the parent,
 //! whose worker threads do not exist in a forked child, and a child's first parallel loop would wait
 //! for them forever (`multiprocessing`'s `fork` start method).
 
