@@ -15,8 +15,14 @@ use crate::robust_support::{
 /// Runs `args`, expects a one-line refusal (exit 2) containing `says`, and no new file in `dir`.
 #[track_caller]
 fn refused(f: &Fixture, args: &[&str], says: &str) {
+    refused_by(f, crate::robust_support::bin(), args, says);
+}
+
+/// [`refused`], with `cmd` (a working folder of its own) running `args`.
+#[track_caller]
+fn refused_by(f: &Fixture, mut cmd: std::process::Command, args: &[&str], says: &str) {
     let before = f.names("");
-    let o = run(args);
+    let o = cmd.args(args).output().expect("run trajdrift");
     let e = stderr(&o);
     expect_code(&o, &[2], &format!("{args:?}"));
     assert!(e.contains(says), "{args:?}: {e}");
@@ -430,17 +436,9 @@ fn io_errors_name_their_cause_and_what_to_do() {
 /// go there), expects a one-line refusal (exit 2) containing `says`, and no new file in it.
 #[track_caller]
 fn refused_here(f: &Fixture, args: &[&str], says: &str) {
-    let before = f.names("");
-    let o = crate::robust_support::bin()
-        .current_dir(f.dir.path())
-        .args(args)
-        .output()
-        .unwrap();
-    let e = stderr(&o);
-    expect_code(&o, &[2], &format!("{args:?}"));
-    assert!(e.contains(says), "{args:?}: {e}");
-    assert_eq!(e.lines().count(), 1, "{args:?}: {e}");
-    assert_eq!(f.names(""), before, "{args:?} wrote something");
+    let mut cmd = crate::robust_support::bin();
+    cmd.current_dir(f.dir.path());
+    refused_by(f, cmd, args, says);
 }
 
 #[test]
